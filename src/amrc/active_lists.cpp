@@ -1,0 +1,118 @@
+#include "amrc/active_lists.hpp"
+
+#include <cmath>
+
+namespace drape {
+
+namespace {
+
+template <class Pred>
+void build_one(const Tiling& tiling, const std::vector<int>& owned, int per_particle, Pred on,
+               ActiveList& list) {
+  list.items.clear();
+  list.tile_begin.assign(owned.size() + 1, 0);
+  for (size_t k = 0; k < owned.size(); ++k) {
+    list.tile_begin[k] = int64_t(list.items.size());
+    const TileRange r = tiling.range(owned[k]);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) {
+        const int64_t p = int64_t(i) * tiling.nj + j;
+        for (int d = 0; d < per_particle; ++d) {
+          const int64_t s = per_particle * p + d;
+          if (on(s)) list.items.push_back(s);
+        }
+      }
+  }
+  list.tile_begin[owned.size()] = int64_t(list.items.size());
+}
+
+}  // namespace
+
+void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned,
+                        ActiveLists& out) {
+  out.tiles = owned;
+  build_one(tiling, owned, 1, [&](int64_t p) { return c.free(p); }, out.particles);
+  build_one(tiling, owned, 2, [&](int64_t s) { return c.edge_on[s] != 0; }, out.edges);
+  build_one(tiling, owned, 2, [&](int64_t s) { return c.triple_on[s] != 0; }, out.triples);
+  build_one(tiling, owned, 1, [&](int64_t s) { return c.shear_on[s] != 0; }, out.shears);
+}
+
+void rebuild_topology(Cloth& c, bool shear_enabled) {
+  const Grid& g = c.grid;
+  for (int d = 0; d < 2; ++d) {
+    c.next[d].assign(g.n(), -1);
+    c.prev[d].assign(g.n(), -1);
+  }
+  // Walk each grid line linking consecutive active particles.
+  for (int i = 0; i < g.ni; ++i) {
+    int64_t last = -1;
+    for (int j = 0; j < g.nj; ++j) {
+      const int64_t p = g.id(i, j);
+      if (!c.active(p)) continue;
+      if (last >= 0) {
+        c.next[1][last] = p;
+        c.prev[1][p] = last;
+      }
+      last = p;
+    }
+  }
+  for (int j = 0; j < g.nj; ++j) {
+    int64_t last = -1;
+    for (int i = 0; i < g.ni; ++i) {
+      const int64_t p = g.id(i, j);
+      if (!c.active(p)) continue;
+      if (last >= 0) {
+        c.next[0][last] = p;
+        c.prev[0][p] = last;
+      }
+      last = p;
+    }
+  }
+  for (int64_t p = 0; p < g.n(); ++p) {
+    const bool on = c.active(p);
+    for (int d = 0; d < 2; ++d) {
+      c.edge_on[2 * p + d] = on && c.next[d][p] >= 0;
+      c.triple_on[2 * p + d] = on && c.next[d][p] >= 0 && c.prev[d][p] >= 0;
+    }
+    c.shear_on[p] = shear_enabled && on && c.next[0][p] >= 0 && c.next[1][p] >= 0;
+  }
+}
+
+}  // namespace drape
+
+namespace drape {
+
+namespace {
+// Half the rest distance to each active neighbour along d: the extent of cloth a particle stands for.
+double extent(const Cloth& c, int64_t p, int d) {
+  const int64_t st = c.grid.stride(d);
+  double e = 0;
+  if (c.next[d][p] >= 0) e += 0.5 * double(c.next[d][p] - p) / st;
+  if (c.prev[d][p] >= 0) e += 0.5 * double(p - c.prev[d][p]) / st;
+  return e * c.grid.h(d);
+}
+}  // namespace
+
+void rebuild_geometry(Cloth& c, double density) {
+  const Grid& g = c.grid;
+  const int64_t n = g.n();
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p < n; ++p) {
+    const double ext[2] = {c.active(p) ? extent(c, p, 0) : 0, c.active(p) ? extent(c, p, 1) : 0};
+    c.mass[p] = density * ext[0] * ext[1];
+    double len[2] = {0, 0};
+    for (int d = 0; d < 2; ++d) {
+      const int64_t s = 2 * p + d;
+      if (c.next[d][p] >= 0) len[d] = double(c.next[d][p] - p) / g.stride(d) * g.h(d);
+      c.edge_rest[s] = c.edge_on[s] ? len[d] : 0;
+      c.edge_width[s] =
+          c.edge_on[s] ? 0.5 * (ext[1 - d] + extent(c, c.next[d][p], 1 - d)) : 0;
+      c.triple_rest[s] = c.triple_on[s] ? ext[d] : 0;
+      c.triple_width[s] = c.triple_on[s] ? ext[1 - d] : 0;
+    }
+    c.shear_area[p] = c.shear_on[p] ? len[0] * len[1] : 0;
+    c.shear_rest[p] = c.shear_on[p] ? std::sqrt(len[0] * len[1]) : 0;
+  }
+}
+
+}  // namespace drape

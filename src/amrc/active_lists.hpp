@@ -1,0 +1,46 @@
+#pragma once
+// The paper's active lists (§4.3): one list per element type of the slots
+// that are active now, sorted by tile and then by index, with the start of
+// each tile's run. Threads split a list into equal chunks; reductions sum
+// each tile's run in order, so results do not depend on the thread count.
+// Rebuilt after AMRC changes the mesh; capacity is reserved once.
+#include <cstdint>
+#include <vector>
+
+#include "decomp/tiles.hpp"
+#include "solver/cloth.hpp"
+
+namespace drape {
+
+struct ActiveList {
+  std::vector<int64_t> items;       // slot or particle indices
+  std::vector<int64_t> tile_begin;  // size tiles+1: items of tile k are [tile_begin[k], tile_begin[k+1])
+  int64_t size() const { return int64_t(items.size()); }
+};
+
+struct ActiveLists {
+  ActiveList particles;  // free particles (their positions are unknowns)
+  ActiveList edges;      // edge slots 2p+d
+  ActiveList triples;    // triple slots 2p+d
+  ActiveList shears;     // shear slots p
+  std::vector<int> tiles;  // the tiles this rank owns, ascending
+};
+
+// Builds the lists over `owned_tiles` (ascending tile ids) from the cloth's
+// flags and element switches. Reuses the lists' capacity.
+void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned_tiles,
+                        ActiveLists& out);
+
+// Rebuilds next/prev neighbour tables and element switches from particle
+// flags: an edge joins consecutive active particles on a grid line, a triple
+// sits at an active particle with active neighbours on both sides, a shear
+// corner at an active particle with both a warp and a weft neighbour.
+void rebuild_topology(Cloth& c, bool shear_enabled);
+
+}  // namespace drape
+
+namespace drape {
+// Rest lengths, widths, areas and particle masses (density * represented
+// area) from the neighbour tables; the total mass is the finest mesh's.
+void rebuild_geometry(Cloth& c, double density);
+}  // namespace drape

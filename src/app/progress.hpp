@@ -1,0 +1,62 @@
+#pragma once
+// Progress lines on rank 0: one per step (at most every half second), and
+// during a long step one per couple of seconds with the iteration and cost;
+// the ETA extrapolates the mean wall time per step.
+#include <chrono>
+#include <cstdio>
+
+#include "solver/time_loop.hpp"
+
+namespace drape {
+
+class Progress {
+ public:
+  Progress(bool on, int steps) : on_(on), steps_(steps), start_(clock::now()), last_(start_) {}
+
+  void iteration(int step, int it, double cost) {
+    if (!on_) return;
+    const auto now = clock::now();
+    if (seconds(last_, now) < 2.0) return;
+    last_ = now;
+    std::printf("  step %d  iteration %d  cost %.4e  (%.0f s)\n", step, it, cost, seconds(start_, now));
+    std::fflush(stdout);
+  }
+
+  void step(const StepStats& st) {
+    if (!on_) return;
+    const auto now = clock::now();
+    const double el = seconds(start_, now);
+    if (seconds(last_, now) < 0.5 && st.step != steps_ && st.step > 1) return;
+    last_ = now;
+    const double eta = el / st.step * (steps_ - st.step);
+    std::printf("step %5d/%d  t %.4f s  dt %.3g ms  iterations %4d%s  cost %.4e  speed %.3g m/s  ETA %s\n",
+                st.step, steps_, st.time, st.dt * 1e3, st.iterations, st.converged ? "" : " (max)",
+                st.cost.total(), st.max_speed, clock_text(eta).c_str());
+    std::fflush(stdout);
+  }
+
+  void finish(bool at_rest, double penetration) {
+    if (!on_) return;
+    std::printf("done in %s: cloth %s, deepest penetration %.3g m\n",
+                clock_text(seconds(start_, clock::now())).c_str(),
+                at_rest ? "at rest" : "still moving", penetration);
+  }
+
+ private:
+  using clock = std::chrono::steady_clock;
+  static double seconds(clock::time_point a, clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+  }
+  static std::string clock_text(double s) {
+    char b[32];
+    const int t = int(s + 0.5);
+    if (t >= 3600) std::snprintf(b, sizeof b, "%dh%02dm", t / 3600, (t / 60) % 60);
+    else std::snprintf(b, sizeof b, "%dm%02ds", t / 60, t % 60);
+    return b;
+  }
+  bool on_;
+  int steps_;
+  clock::time_point start_, last_;
+};
+
+}  // namespace drape

@@ -1,0 +1,38 @@
+#include "decomp/reduction.hpp"
+
+#include <algorithm>
+
+namespace drape {
+
+MpiReducer::MpiReducer(MPI_Comm comm, int total_tiles) : comm_(comm), tiles_(total_tiles) {}
+
+void MpiReducer::sum_tiles(const std::vector<int>& owned, const double* partials, int k,
+                           double* out) const {
+  global_.assign(size_t(k) * tiles_, 0.0);
+  const size_t n = owned.size();
+  for (int r = 0; r < k; ++r)
+    for (size_t t = 0; t < n; ++t) global_[size_t(r) * tiles_ + owned[t]] = partials[r * n + t];
+  MPI_Allreduce(MPI_IN_PLACE, global_.data(), k * tiles_, MPI_DOUBLE, MPI_SUM, comm_);
+  for (int r = 0; r < k; ++r) {
+    double s = 0;
+    for (int t = 0; t < tiles_; ++t) s += global_[size_t(r) * tiles_ + t];
+    out[r] = s;
+  }
+}
+
+double MpiReducer::max(double v) const {
+  MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_DOUBLE, MPI_MAX, comm_);
+  return v;
+}
+
+uint64_t MpiReducer::sum_u64(uint64_t v) const {
+  MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_UINT64_T, MPI_SUM, comm_);
+  return v;
+}
+
+int64_t MpiReducer::sum_i64(int64_t v) const {
+  MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_INT64_T, MPI_SUM, comm_);
+  return v;
+}
+
+}  // namespace drape

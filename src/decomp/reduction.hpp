@@ -1,0 +1,27 @@
+#pragma once
+// Reductions across ranks in a fixed order (DESIGN §3). Each tile's partial
+// is non-zero on exactly one rank, so an MPI sum over a vector indexed by
+// global tile id is exact (x + 0 = x); the tiles are then summed in tile
+// order on every rank. Bitwise the same on any number of ranks.
+#include <mpi.h>
+
+#include "solver/reducer.hpp"
+
+namespace drape {
+
+class MpiReducer : public Reducer {
+ public:
+  MpiReducer(MPI_Comm comm, int total_tiles);
+  void sum_tiles(const std::vector<int>& owned, const double* partials, int k,
+                 double* out) const override;
+  double max(double v) const override;
+  uint64_t sum_u64(uint64_t v) const override;
+  int64_t sum_i64(int64_t v) const override;
+
+ private:
+  MPI_Comm comm_;
+  int tiles_;
+  mutable std::vector<double> global_;
+};
+
+}  // namespace drape

@@ -1,0 +1,609 @@
+// Scene configuration: TOML file + --set overrides -> validated Scene.
+//
+// The flow: parse the file into a toml::table, merge the overrides into it
+// (remembering which keys they set), refuse unknown sections and keys, read
+// each known key with a type check, then check ranges on the resolved Scene.
+// Every message is one line naming the key and where its value came from:
+// "file:line" for a file, "--set key=value" for an override.
+#include "io/config.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "io/error.hpp"
+
+namespace drape {
+namespace {
+
+// ---------------------------------------------------------------- schema --
+
+enum class Kind { Int, Float, Bool, String, Int2, Float2, Float3 };
+
+struct KeySpec {
+  const char* section;  // "" for a top-level key
+  const char* key;
+  Kind kind;
+};
+
+// Exactly the fields of scene.hpp. A new key goes here and in read_scene(),
+// validate() and scene_to_toml().
+const KeySpec kKeys[] = {
+    {"", "name", Kind::String},
+    {"cloth", "particles", Kind::Int2},
+    {"cloth", "size", Kind::Float2},
+    {"cloth", "fabric", Kind::String},
+    {"cloth", "tile", Kind::Int},
+    {"cloth", "shear", Kind::Bool},
+    {"cloth", "height", Kind::Float},
+    {"cloth", "center", Kind::Float2},
+    {"obstacle", "shape", Kind::String},
+    {"obstacle", "center", Kind::Float3},
+    {"obstacle", "size", Kind::Float3},
+    {"obstacle", "radius", Kind::Float},
+    {"obstacle", "floor", Kind::Bool},
+    {"solver", "dt", Kind::Float},
+    {"solver", "dt_min", Kind::Float},
+    {"solver", "dt_max", Kind::Float},
+    {"solver", "steps", Kind::Int},
+    {"solver", "max_iterations", Kind::Int},
+    {"solver", "tolerance", Kind::Float},
+    {"solver", "gradient", Kind::String},
+    {"solver", "damping", Kind::Float},
+    {"solver", "rest_speed", Kind::Float},
+    {"solver", "contact_thickness", Kind::Float},
+    {"output", "every", Kind::Int},
+    {"output", "picture", Kind::Bool},
+    {"parallel", "schedule", Kind::String},
+    {"parallel", "chunk", Kind::Int},
+    {"parallel", "threads", Kind::Int},
+};
+
+const char* const kSections[] = {"cloth", "obstacle", "solver", "output", "parallel"};
+
+std::string full_name(const KeySpec& k) {
+  return *k.section ? std::string(k.section) + "." + k.key : std::string(k.key);
+}
+
+const KeySpec* find_key(const std::string& full) {
+  for (const KeySpec& k : kKeys)
+    if (full_name(k) == full) return &k;
+  return nullptr;
+}
+
+bool is_section(const std::string& name) {
+  for (const char* s : kSections)
+    if (name == s) return true;
+  return false;
+}
+
+const char* expected(Kind k) {
+  switch (k) {
+    case Kind::Int: return "an integer";
+    case Kind::Float: return "a number";
+    case Kind::Bool: return "a boolean (true or false)";
+    case Kind::String: return "a string";
+    case Kind::Int2: return "an array of 2 integers";
+    case Kind::Float2: return "an array of 2 numbers";
+    case Kind::Float3: return "an array of 3 numbers";
+  }
+  return "?";
+}
+
+const char* type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a floating-point number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::date: return "a date";
+    case toml::node_type::time: return "a time";
+    case toml::node_type::date_time: return "a date-time";
+    default: return "nothing";
+  }
+}
+
+// ------------------------------------------------------------ formatting --
+
+// Shortest text that reads back to exactly `v`, always a TOML float. Like
+// Python's repr: plain digits for 1e-4 <= |v| < 1e16, else an exponent.
+std::string format_double(double v) {
+  char buf[400];  // room for the longest fixed-notation double
+  const double a = std::fabs(v);
+  const auto form = a == 0 || (a >= 1e-4 && a < 1e16) ? std::chars_format::fixed
+                                                       : std::chars_format::scientific;
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, form);
+  std::string s(buf, r.ptr);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // "1" -> "1.0"
+  return s;
+}
+
+template <class T, size_t N>
+std::string format_array(const std::array<T, N>& a) {
+  std::string s = "[";
+  for (size_t i = 0; i < N; ++i) {
+    if (i) s += ", ";
+    if constexpr (std::is_floating_point_v<T>)
+      s += format_double(a[i]);
+    else
+      s += std::to_string(a[i]);
+  }
+  return s + "]";
+}
+
+// A TOML basic string: quotes, backslashes and control characters escaped.
+std::string quote(const std::string& text) {
+  std::string s = "\"";
+  for (unsigned char c : text) {
+    switch (c) {
+      case '"': s += "\\\""; break;
+      case '\\': s += "\\\\"; break;
+      case '\n': s += "\\n"; break;
+      case '\t': s += "\\t"; break;
+      case '\r': s += "\\r"; break;
+      default:
+        if (c < 0x20 || c == 0x7f) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04X", c);
+          s += buf;
+        } else {
+          s += static_cast<char>(c);
+        }
+    }
+  }
+  return s + "\"";
+}
+
+// ---------------------------------------------------------------- errors --
+
+// One line, always: a newline inside a user's value must not split it.
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+  std::string msg = where.empty() ? what : where + ": " + what;
+  std::replace(msg.begin(), msg.end(), '\n', ' ');
+  throw InputError(msg);
+}
+
+std::string location(const toml::source_region& src) {
+  if (!src.path) return "";
+  return *src.path + ":" + std::to_string(src.begin.line);
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+// " (did you mean solver.dt?)" for a near miss, else "". The bare key also
+// counts, so a key put in the wrong section finds its home.
+std::string suggest_key(const std::string& full) {
+  const auto dot = full.find('.');
+  const std::string bare = dot == std::string::npos ? full : full.substr(dot + 1);
+  const std::string section = dot == std::string::npos ? "" : full.substr(0, dot);
+  size_t best = SIZE_MAX;
+  std::string name;
+  for (const KeySpec& k : kKeys) {
+    const size_t d = std::min(edit_distance(full, full_name(k)),
+                              edit_distance(bare, k.key) + (section == k.section ? 0 : 2));
+    if (d < best) best = d, name = full_name(k);
+  }
+  const size_t limit = std::max<size_t>(2, bare.size() / 3);
+  return best <= limit ? " (did you mean " + name + "?)" : "";
+}
+
+std::string suggest_section(const std::string& name) {
+  size_t best = SIZE_MAX;
+  std::string found;
+  for (const char* s : kSections) {
+    const size_t d = edit_distance(name, s);
+    if (d < best) best = d, found = s;
+  }
+  const size_t limit = std::max<size_t>(2, name.size() / 3);
+  return best <= limit ? " (did you mean [" + found + "]?)" : "";
+}
+
+// ------------------------------------------------------- the merged table --
+
+struct Config {
+  toml::table root;
+  std::map<std::string, std::string> overrides;  // key -> "--set key=value"
+
+  const toml::node* node(const KeySpec& k) const {
+    const toml::node* n = *k.section ? root.get(k.section) : &root;
+    const toml::table* t = n ? n->as_table() : nullptr;
+    return t ? t->get(k.key) : nullptr;
+  }
+  // Where the value of `key` came from: "--set ...", "file:line" or "" (default).
+  std::string where(const std::string& key) const {
+    const auto o = overrides.find(key);
+    if (o != overrides.end()) return o->second;
+    const KeySpec* k = find_key(key);
+    const toml::node* n = k ? node(*k) : nullptr;
+    return n ? location(n->source()) : "";
+  }
+};
+
+toml::table parse_scene_file(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    fail("", "cannot open scene file '" + path + "': no such file");
+  if (std::filesystem::is_directory(path, ec))
+    fail("", "cannot read scene file '" + path + "': it is a directory");
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) fail("", "cannot read scene file '" + path + "'");
+  try {
+    return toml::parse(text.str(), path);
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    fail(path + ":" + std::to_string(b.line) + ":" + std::to_string(b.column),
+         "TOML syntax error: " + std::string(e.description()));
+  }
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+// "section.key=value" into the table. Strings may be bare words
+// (--set obstacle.shape=sphere); everything else is read as a TOML value.
+void apply_override(Config& cfg, const std::string& text) {
+  const std::string where = "--set " + text;
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) fail(where, "expected section.key=value (no '=')");
+  const std::string key = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
+  if (key.empty()) fail(where, "missing key before '='");
+  const KeySpec* spec = find_key(key);
+  if (!spec) fail(where, "unknown key " + key + suggest_key(key));
+  if (value.empty()) fail(where, key + ": missing value after '='");
+
+  toml::table* section = &cfg.root;
+  if (*spec->section) {
+    if (!cfg.root.contains(spec->section)) cfg.root.insert(spec->section, toml::table{});
+    section = cfg.root.get(spec->section)->as_table();
+    if (!section) return;  // the file's malformed [section] is reported later
+  }
+  const bool quoted = value[0] == '"' || value[0] == '\'';
+  if (spec->kind == Kind::String && !quoted) {
+    section->insert_or_assign(spec->key, value);
+  } else {
+    toml::table parsed;
+    try {
+      parsed = toml::parse("v = " + value, std::string_view("--set"));
+    } catch (const toml::parse_error&) {
+      // toml++'s own words ("expected 'false', saw 'fas'") would mislead here.
+      fail(where, key + ": expected " + expected(spec->kind) + ", got '" + value + "' (not a TOML value)");
+    }
+    if (parsed.size() != 1 || !parsed.contains("v"))
+      fail(where, key + ": expected " + expected(spec->kind) + ", got '" + value + "' (more than one value)");
+    section->insert_or_assign(spec->key, *parsed.get("v"));
+  }
+  cfg.overrides[key] = where;
+}
+
+// Unknown sections and keys. All are found and the first in the file is
+// reported, so the message does not depend on the table's key order.
+void refuse_unknown(const Config& cfg) {
+  struct Problem {
+    uint32_t line;
+    std::string where, what;
+  };
+  std::vector<Problem> found;
+  auto add = [&](const toml::source_region& src, std::string what) {
+    found.push_back({src.begin.line, location(src), std::move(what)});
+  };
+  for (auto&& [k, node] : cfg.root) {
+    const std::string name(k.str());
+    if (name == "name") continue;
+    if (!is_section(name)) {
+      if (node.is_table())
+        add(k.source(), "unknown section [" + name + "]" + suggest_section(name));
+      else
+        add(k.source(), "unknown key " + name + suggest_key(name));
+      continue;
+    }
+    const toml::table* t = node.as_table();
+    if (!t) {
+      add(k.source(), name + ": expected a section [" + name + "], got " + type_name(node));
+      continue;
+    }
+    for (auto&& [kk, n] : *t) {
+      const std::string full = name + "." + std::string(kk.str());
+      if (!find_key(full)) add(kk.source(), "unknown key " + full + suggest_key(full));
+    }
+  }
+  if (found.empty()) return;
+  const auto first = std::min_element(found.begin(), found.end(),
+                                      [](const Problem& a, const Problem& b) { return a.line < b.line; });
+  fail(first->where, first->what);
+}
+
+// --------------------------------------------------------- typed reading --
+
+class Reader {
+ public:
+  explicit Reader(const Config& cfg) : cfg_(cfg) {}
+
+  void get(const char* key, int& out) { if (auto* n = find(key, Kind::Int)) out = to_int(key, *n, Kind::Int); }
+  void get(const char* key, double& out) { if (auto* n = find(key, Kind::Float)) out = to_double(key, *n, Kind::Float); }
+  void get(const char* key, bool& out) {
+    if (auto* n = find(key, Kind::Bool)) {
+      if (!n->is_boolean()) wrong_type(key, Kind::Bool, type_name(*n));
+      out = n->as_boolean()->get();
+    }
+  }
+  bool get(const char* key, std::string& out) {
+    const toml::node* n = find(key, Kind::String);
+    if (!n) return false;
+    if (!n->is_string()) wrong_type(key, Kind::String, type_name(*n));
+    out = n->as_string()->get();
+    return true;
+  }
+  void get(const char* key, std::array<int, 2>& out) {
+    if (auto* n = find(key, Kind::Int2))
+      for (size_t i = 0; i < 2; ++i) out[i] = to_int(key, element(key, *n, Kind::Int2, 2, i), Kind::Int2);
+  }
+  template <size_t N>
+  void get(const char* key, std::array<double, N>& out) {
+    const Kind kind = N == 2 ? Kind::Float2 : Kind::Float3;
+    if (auto* n = find(key, kind))
+      for (size_t i = 0; i < N; ++i) out[i] = to_double(key, element(key, *n, kind, N, i), kind);
+  }
+
+  // A string key naming one of an enumeration's values (as to_string spells them).
+  template <class E>
+  void get_enum(const char* key, E& out, std::initializer_list<E> all) {
+    std::string text;
+    if (!get(key, text)) return;
+    std::string names;
+    for (E e : all) {
+      if (text == to_string(e)) {
+        out = e;
+        return;
+      }
+      names += std::string(names.empty() ? "" : ", ") + to_string(e);
+    }
+    fail(cfg_.where(key), std::string(key) + ": must be one of " + names + "; got " + quote(text));
+  }
+
+ private:
+  // The key's node, or null when not given. The schema and the reader must
+  // agree on the kind: a mismatch is a bug here, not bad input.
+  const toml::node* find(const char* key, Kind kind) const {
+    const KeySpec* k = find_key(key);
+    if (!k || k->kind != kind) throw std::logic_error(std::string("config schema: ") + key);
+    return cfg_.node(*k);
+  }
+
+  [[noreturn]] void wrong_type(const std::string& key, Kind kind, const std::string& got) const {
+    fail(cfg_.where(key), key + ": expected " + expected(kind) + ", got " + got);
+  }
+
+  const toml::node& element(const std::string& key, const toml::node& n, Kind kind, size_t len, size_t i) const {
+    const toml::array* a = n.as_array();
+    if (!a) wrong_type(key, kind, type_name(n));
+    if (a->size() != len) wrong_type(key, kind, "an array of " + std::to_string(a->size()));
+    return *a->get(i);
+  }
+
+  // In an array, the message names the element's position (1-based).
+  std::string got(const toml::node& n, Kind kind) const {
+    std::string s = type_name(n);
+    return kind == Kind::Int || kind == Kind::Float ? s : s + " in the array";
+  }
+
+  int to_int(const std::string& key, const toml::node& n, Kind kind) const {
+    if (!n.is_integer()) wrong_type(key, kind, got(n, kind));
+    const int64_t v = n.as_integer()->get();
+    if (v < INT_MIN || v > INT_MAX)
+      fail(cfg_.where(key), key + ": " + std::to_string(v) + " is out of range");
+    return static_cast<int>(v);
+  }
+
+  // Integers are fine for float keys (dt = 1); inf and nan are not.
+  double to_double(const std::string& key, const toml::node& n, Kind kind) const {
+    double v = 0;
+    if (n.is_integer())
+      v = static_cast<double>(n.as_integer()->get());
+    else if (n.is_floating_point())
+      v = n.as_floating_point()->get();
+    else
+      wrong_type(key, kind, got(n, kind));
+    if (!std::isfinite(v)) fail(cfg_.where(key), key + ": must be a finite number, got " + format_double(v));
+    return v;
+  }
+
+  const Config& cfg_;
+};
+
+void read_scene(const Config& cfg, Scene& s) {
+  Reader r(cfg);
+  r.get("name", s.name);
+  r.get("cloth.particles", s.cloth.particles);
+  r.get("cloth.size", s.cloth.size);
+  r.get("cloth.fabric", s.cloth.fabric);
+  r.get("cloth.tile", s.cloth.tile);
+  r.get("cloth.shear", s.cloth.shear);
+  r.get("cloth.height", s.cloth.height);
+  r.get("cloth.center", s.cloth.center);
+  r.get_enum("obstacle.shape", s.obstacle.shape,
+             {ObstacleShape::Box, ObstacleShape::Sphere, ObstacleShape::None});
+  r.get("obstacle.center", s.obstacle.center);
+  r.get("obstacle.size", s.obstacle.size);
+  r.get("obstacle.radius", s.obstacle.radius);
+  r.get("obstacle.floor", s.obstacle.floor);
+  r.get("solver.dt", s.solver.dt);
+  r.get("solver.dt_min", s.solver.dt_min);
+  r.get("solver.dt_max", s.solver.dt_max);
+  r.get("solver.steps", s.solver.steps);
+  r.get("solver.max_iterations", s.solver.max_iterations);
+  r.get("solver.tolerance", s.solver.tolerance);
+  r.get_enum("solver.gradient", s.solver.gradient, {GradientMode::Analytic, GradientMode::Numeric});
+  r.get("solver.damping", s.solver.damping);
+  r.get("solver.rest_speed", s.solver.rest_speed);
+  r.get("solver.contact_thickness", s.solver.contact_thickness);
+  r.get("output.every", s.output.every);
+  r.get("output.picture", s.output.picture);
+  r.get_enum("parallel.schedule", s.parallel.schedule,
+             {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided});
+  r.get("parallel.chunk", s.parallel.chunk);
+  r.get("parallel.threads", s.parallel.threads);
+}
+
+// ------------------------------------------------------------ validation --
+
+class Checker {
+ public:
+  explicit Checker(const Config& cfg) : cfg_(cfg) {}
+  void operator()(bool ok, const std::string& key, const std::string& what) const {
+    if (!ok) fail(cfg_.where(key), key + ": " + what);
+  }
+  // The key of a pair whose value the user gave, so the message points at it.
+  std::string given(const std::string& a, const std::string& b) const {
+    return !cfg_.where(a).empty() || cfg_.where(b).empty() ? a : b;
+  }
+
+ private:
+  const Config& cfg_;
+};
+
+template <class T, size_t N>
+bool all_positive(const std::array<T, N>& a) {
+  return std::all_of(a.begin(), a.end(), [](T v) { return v > 0; });
+}
+
+void validate(const Config& cfg, const Scene& s) {
+  const Checker check(cfg);
+  const auto got = [](double v) { return ", got " + format_double(v); };
+  const auto& c = s.cloth;
+  check(!s.name.empty(), "name", "must not be empty");
+  check(c.particles[0] >= 3 && c.particles[1] >= 3, "cloth.particles",
+        "NI and NJ must each be >= 3, got " + format_array(c.particles));
+  check(int64_t(c.particles[0]) * c.particles[1] <= INT_MAX, "cloth.particles",
+        "NI x NJ must be at most " + std::to_string(INT_MAX) + ", got " + format_array(c.particles));
+  check(all_positive(c.size), "cloth.size", "sizes must be > 0, got " + format_array(c.size));
+  check(!c.fabric.empty(), "cloth.fabric", "must not be empty");
+  check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));
+  check(!s.obstacle.floor || c.height >= 0, "cloth.height",
+        "must be >= 0 (the cloth starts above the floor; obstacle.floor = true)" + got(c.height));
+
+  const auto& o = s.obstacle;
+  check(all_positive(o.size), "obstacle.size", "sizes must be > 0, got " + format_array(o.size));
+  check(o.radius > 0, "obstacle.radius", "must be > 0" + got(o.radius));
+
+  const auto& v = s.solver;
+  check(v.dt > 0, "solver.dt", "must be > 0" + got(v.dt));
+  check(v.dt_min > 0, "solver.dt_min", "must be > 0" + got(v.dt_min));
+  check(v.dt_max > 0, "solver.dt_max", "must be > 0" + got(v.dt_max));
+  check(v.dt_min <= v.dt_max, check.given("solver.dt_min", "solver.dt_max"),
+        "solver.dt_min (" + format_double(v.dt_min) + ") must be <= solver.dt_max (" +
+            format_double(v.dt_max) + ")");
+  const std::string bound = v.dt < v.dt_min ? "solver.dt_min" : "solver.dt_max";
+  check(v.dt_min <= v.dt && v.dt <= v.dt_max, check.given("solver.dt", bound),
+        "solver.dt must lie in [solver.dt_min, solver.dt_max] = [" + format_double(v.dt_min) + ", " +
+            format_double(v.dt_max) + "]" + got(v.dt));
+  check(v.steps >= 1, "solver.steps", "must be >= 1, got " + std::to_string(v.steps));
+  check(v.max_iterations >= 1, "solver.max_iterations",
+        "must be >= 1, got " + std::to_string(v.max_iterations));
+  check(v.tolerance > 0, "solver.tolerance", "must be > 0" + got(v.tolerance));
+  check(v.damping >= 0 && v.damping < 1, "solver.damping", "must be in [0, 1)" + got(v.damping));
+  check(v.rest_speed >= 0, "solver.rest_speed", "must be >= 0" + got(v.rest_speed));
+  check(v.contact_thickness >= 0, "solver.contact_thickness",
+        "must be >= 0 (0: automatic)" + got(v.contact_thickness));
+
+  check(s.output.every >= 0, "output.every", "must be >= 0, got " + std::to_string(s.output.every));
+  check(s.parallel.chunk >= 1, "parallel.chunk", "must be >= 1, got " + std::to_string(s.parallel.chunk));
+  check(s.parallel.threads >= 0 && s.parallel.threads <= 1024, "parallel.threads",
+        "must be in [0, 1024] (0: OpenMP default), got " + std::to_string(s.parallel.threads));
+}
+
+// ----------------------------------------------------------------- output --
+
+// "key = value  # comment", comments aligned for reading.
+void line(std::ostringstream& os, const char* key, const std::string& value, const char* comment) {
+  std::string kv = std::string(key) + " = " + value;
+  if (*comment) kv.resize(std::max<size_t>(kv.size() + 1, 34), ' '), kv += std::string("# ") + comment;
+  os << kv << "\n";
+}
+
+std::string b(bool v) { return v ? "true" : "false"; }
+
+}  // namespace
+
+Scene load_scene(const std::optional<std::string>& path, const std::vector<std::string>& overrides) {
+  Config cfg;
+  if (path) cfg.root = parse_scene_file(*path);
+  for (const std::string& o : overrides) apply_override(cfg, o);
+  refuse_unknown(cfg);
+  Scene s;  // its defaults are the embedded default scene
+  read_scene(cfg, s);
+  validate(cfg, s);
+  return s;
+}
+
+std::string scene_to_toml(const Scene& s) {
+  std::ostringstream os;
+  os << "# drape scene, fully resolved (SI units)\n";
+  line(os, "name", quote(s.name), "");
+  const auto& c = s.cloth;
+  os << "\n[cloth]\n";
+  line(os, "particles", format_array(c.particles), "NI (warp), NJ (weft)");
+  line(os, "size", format_array(c.size), "m along i, j");
+  line(os, "fabric", quote(c.fabric), "name in data/kes/ or a path");
+  line(os, "tile", std::to_string(c.tile), "particles per tile side");
+  line(os, "shear", b(c.shear), "KES shear band");
+  line(os, "height", format_double(c.height), "m, z of the flat cloth at t = 0");
+  line(os, "center", format_array(c.center), "m, x-y of the cloth centre");
+  const auto& o = s.obstacle;
+  os << "\n[obstacle]\n";
+  line(os, "shape", quote(to_string(o.shape)), "box | sphere | none");
+  line(os, "center", format_array(o.center), "m");
+  line(os, "size", format_array(o.size), "m, box edge lengths");
+  line(os, "radius", format_double(o.radius), "m, sphere");
+  line(os, "floor", b(o.floor), "plane z = 0");
+  const auto& v = s.solver;
+  os << "\n[solver]\n";
+  line(os, "dt", format_double(v.dt), "s, first step (adaptive afterwards)");
+  line(os, "dt_min", format_double(v.dt_min), "s");
+  line(os, "dt_max", format_double(v.dt_max), "s");
+  line(os, "steps", std::to_string(v.steps), "time steps at most");
+  line(os, "max_iterations", std::to_string(v.max_iterations), "CG iterations per step at most");
+  line(os, "tolerance", format_double(v.tolerance), "cost per active particle");
+  line(os, "gradient", quote(to_string(v.gradient)), "analytic | numeric");
+  line(os, "damping", format_double(v.damping), "fraction of velocity removed per step");
+  line(os, "rest_speed", format_double(v.rest_speed), "m/s; > 0 stops once at rest");
+  line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");
+  os << "\n[output]\n";
+  line(os, "every", std::to_string(s.output.every), "frame every N steps (0: final only)");
+  line(os, "picture", b(s.output.picture), "drape.png of the final state");
+  const auto& p = s.parallel;
+  os << "\n[parallel]\n";
+  line(os, "schedule", quote(to_string(p.schedule)), "active-lists | static | dynamic | guided");
+  line(os, "chunk", std::to_string(p.chunk), "tiles per chunk (dynamic schedule)");
+  line(os, "threads", std::to_string(p.threads), "0: OMP_NUM_THREADS / OpenMP default");
+  return os.str();
+}
+
+}  // namespace drape

@@ -1,0 +1,22 @@
+#pragma once
+// Scene configuration: TOML file + --set overrides -> validated Scene.
+// Strict: unknown keys, wrong types, out-of-range values and missing files
+// are refused with an InputError naming the key (and file:line where known).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "solver/scene.hpp"
+
+namespace drape {
+
+// `path`: TOML file, or none for the embedded default scene.
+// `overrides`: "section.key=value" strings, value in TOML syntax
+// (numbers, true/false, [a, b], quoted or bare strings).
+Scene load_scene(const std::optional<std::string>& path,
+                 const std::vector<std::string>& overrides);
+
+// The resolved scene as TOML text (what --dry-run prints; also stored in outputs).
+std::string scene_to_toml(const Scene& s);
+
+}  // namespace drape

@@ -1,0 +1,568 @@
+// Hdf5Output: one HDF5 file per run, written collectively by all ranks
+// (parallel HDF5, MPI-IO driver), plus an XDMF description for ParaView.
+//
+// Layout of drape.h5
+//   /                      attributes: scene, scene_toml, fabric, fabric_source,
+//                          fabric_density, fabric_thickness, kes_* (SI), obstacle_*,
+//                          ni, nj, drape_version, units
+//   /mesh/quads            int32 (NQ x 4), quads (i,j) (i+1,j) (i+1,j+1) (i,j+1)
+//   /frames/NNNNNN/        one group per output step (name: the step, 6 digits)
+//       positions          float64 (NI x NJ x 3)   m
+//       tension            float64 (NI x NJ x 2)   N/m,   [..][0] warp, [..][1] weft
+//       moment             float64 (NI x NJ x 2)   N*m/m
+//       shear              float64 (NI x NJ)       N/m
+//       active             uint8   (NI x NJ)       flags & 1
+//       flags              uint8   (NI x NJ)       ParticleFlag bits
+//       level              uint8   (NI x NJ)       AMRC level
+//     attributes: step (int64), time (float64, s)
+//
+// Each rank writes exactly the blocks it owns: memory and file dataspaces get
+// the same union of hyperslabs (the frame's arrays are in global particle
+// order), so the file's content does not depend on the number of ranks.
+#include <hdf5.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "io/output.hpp"
+#include "solver/cloth.hpp"
+
+#ifndef DRAPE_VERSION
+#define DRAPE_VERSION "unknown"
+#endif
+
+namespace drape {
+namespace {
+
+// ---------------------------------------------------------------- errors --
+
+// The innermost HDF5 error description, so that messages say what failed.
+std::string hdf5_error_text() {
+  std::string text;
+  auto walk = [](unsigned n, const H5E_error2_t* e, void* data) -> herr_t {
+    auto* out = static_cast<std::string*>(data);
+    if (n == 0 && e->desc && *e->desc) *out = e->desc;
+    return 0;
+  };
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, walk, &text);
+  H5Eclear2(H5E_DEFAULT);
+  return text;
+}
+
+[[noreturn]] void fail(const std::string& what) {
+  std::string detail = hdf5_error_text();
+  throw std::runtime_error("HDF5 output: " + what + (detail.empty() ? "" : " (" + detail + ")"));
+}
+
+hid_t check(hid_t id, const std::string& what) {
+  if (id < 0) fail(what);
+  return id;
+}
+
+void check_status(herr_t status, const std::string& what) {
+  if (status < 0) fail(what);
+}
+
+// Owns one HDF5 identifier; closes it on scope exit, also while unwinding,
+// so that a failed write still lets the file be closed.
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Handle() = default;
+  Handle(hid_t id, Closer close) : id_(id), close_(close) {}
+  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, -1)), close_(o.close_) {}
+  Handle& operator=(Handle&& o) noexcept {
+    reset();
+    id_ = std::exchange(o.id_, -1);
+    close_ = o.close_;
+    return *this;
+  }
+  ~Handle() { reset(); }
+  hid_t get() const { return id_; }
+  void reset() {
+    if (id_ >= 0 && close_) close_(id_);
+    id_ = -1;
+  }
+  // Closes now and reports failure (a close can be where data hits the disk).
+  void close(const std::string& what) {
+    hid_t id = std::exchange(id_, -1);
+    if (id >= 0) check_status(close_(id), what);
+  }
+
+ private:
+  hid_t id_ = -1;
+  Closer close_ = nullptr;
+};
+
+Handle make_space(const std::vector<hsize_t>& dims) {
+  return {check(H5Screate_simple(int(dims.size()), dims.data(), nullptr), "creating a dataspace"),
+          H5Sclose};
+}
+
+Handle make_plist(hid_t cls, const std::string& what) {
+  return {check(H5Pcreate(cls), what), H5Pclose};
+}
+
+// ------------------------------------------------------------ attributes --
+
+Handle string_type(size_t len) {
+  Handle t(check(H5Tcopy(H5T_C_S1), "creating a string type"), H5Tclose);
+  check_status(H5Tset_size(t.get(), len + 1), "sizing a string type");  // + terminator
+  check_status(H5Tset_strpad(t.get(), H5T_STR_NULLTERM), "string padding");
+  check_status(H5Tset_cset(t.get(), H5T_CSET_UTF8), "string character set");
+  return t;
+}
+
+void put_string(hid_t obj, const char* name, const std::string& value) {
+  Handle type = string_type(value.size());
+  Handle space(check(H5Screate(H5S_SCALAR), "creating a scalar dataspace"), H5Sclose);
+  const std::string what = std::string("attribute '") + name + "'";
+  Handle attr(check(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                    "creating " + what),
+              H5Aclose);
+  check_status(H5Awrite(attr.get(), type.get(), value.c_str()), "writing " + what);
+}
+
+template <class T>
+void put_numbers(hid_t obj, const char* name, hid_t file_type, hid_t mem_type, const T* v,
+                 size_t n) {
+  Handle space = n == 1 ? Handle(check(H5Screate(H5S_SCALAR), "creating a scalar dataspace"),
+                                 H5Sclose)
+                        : make_space({hsize_t(n)});
+  const std::string what = std::string("attribute '") + name + "'";
+  Handle attr(check(H5Acreate2(obj, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                    "creating " + what),
+              H5Aclose);
+  check_status(H5Awrite(attr.get(), mem_type, v), "writing " + what);
+}
+
+void put_double(hid_t obj, const char* name, double v) {
+  put_numbers(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v, 1);
+}
+
+void put_pair(hid_t obj, const char* name, double warp, double weft) {
+  const double v[2] = {warp, weft};
+  put_numbers(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v, 2);
+}
+
+void put_int(hid_t obj, const char* name, int64_t v) {
+  put_numbers(obj, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &v, 1);
+}
+
+void put_fabric(hid_t root, const Fabric& fab) {
+  put_string(root, "fabric", fab.name);
+  put_string(root, "fabric_source", fab.source);
+  put_double(root, "fabric_density", fab.density);
+  put_double(root, "fabric_thickness", fab.thickness);
+  const TensileKES* t = fab.tensile;
+  const BendingKES* b = fab.bending;
+  put_pair(root, "kes_emt", t[0].emt, t[1].emt);
+  put_pair(root, "kes_lt", t[0].lt, t[1].lt);
+  put_pair(root, "kes_rt", t[0].rt, t[1].rt);
+  put_pair(root, "kes_fm", t[0].fm, t[1].fm);
+  put_pair(root, "kes_wt", t[0].wt(), t[1].wt());
+  put_pair(root, "kes_b", b[0].b, b[1].b);
+  put_pair(root, "kes_hb", b[0].hb, b[1].hb);
+  put_double(root, "kes_g", fab.shear.g);
+  put_double(root, "kes_hg", fab.shear.hg);
+  // Which parts come from measured curves rather than the KES fit.
+  const int64_t measured[5] = {!t[0].load.empty(), !t[1].load.empty(), !b[0].load.empty(),
+                               !b[1].load.empty(), !fab.shear.load.empty()};
+  put_numbers(root, "measured_curves", H5T_STD_I64LE, H5T_NATIVE_INT64, measured, 5);
+}
+
+void put_obstacle(hid_t root, const ObstacleSpec& ob) {
+  put_string(root, "obstacle_shape", to_string(ob.shape));
+  put_numbers(root, "obstacle_center", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, ob.center.data(), 3);
+  put_numbers(root, "obstacle_size", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, ob.size.data(), 3);
+  put_double(root, "obstacle_radius", ob.radius);
+  put_int(root, "obstacle_floor", ob.floor ? 1 : 0);
+}
+
+const char* kUnits =
+    "SI: positions m; tension, shear N/m; moment N*m/m; time s; fabric_density kg/m^2; "
+    "fabric_thickness m; kes_emt, kes_lt, kes_rt fractions; kes_fm N/m; kes_wt J/m^2; "
+    "kes_b N*m; kes_hb N; kes_g N/m/rad; kes_hg N/m (hb, hg: half the KES loop widths)";
+
+// ------------------------------------------------------------- datasets --
+
+// File and memory dataspaces of an (NI x NJ [x C]) array, both selecting the
+// union of the owned blocks (or nothing).
+struct Selection {
+  Handle file, mem;
+  hsize_t count = 0;  // elements selected
+};
+
+Selection select_blocks(const std::vector<Block>& owned, int ni, int nj, int comps) {
+  std::vector<hsize_t> dims = {hsize_t(ni), hsize_t(nj)};
+  if (comps > 1) dims.push_back(hsize_t(comps));
+  Selection s{make_space(dims), make_space(dims), 0};
+  H5S_seloper_t op = H5S_SELECT_SET;
+  for (const Block& b : owned) {
+    if (b.i0 < 0 || b.j0 < 0 || b.i1 > ni || b.j1 > nj)
+      throw std::runtime_error("HDF5 output: an owned block lies outside the grid");
+    if (b.i1 <= b.i0 || b.j1 <= b.j0) continue;
+    const hsize_t start[3] = {hsize_t(b.i0), hsize_t(b.j0), 0};
+    const hsize_t count[3] = {hsize_t(b.i1 - b.i0), hsize_t(b.j1 - b.j0), hsize_t(comps)};
+    for (hid_t sp : {s.file.get(), s.mem.get()})
+      check_status(H5Sselect_hyperslab(sp, op, start, nullptr, count, nullptr),
+                   "selecting an owned block");
+    op = H5S_SELECT_OR;
+    s.count += count[0] * count[1] * count[2];
+  }
+  if (op == H5S_SELECT_SET) {  // owns nothing: still joins the collective write
+    check_status(H5Sselect_none(s.file.get()), "selecting nothing");
+    check_status(H5Sselect_none(s.mem.get()), "selecting nothing");
+  }
+  return s;
+}
+
+// Dataset creation without modification times, so identical runs give
+// identical files.
+Handle untimed_dcpl() {
+  Handle dcpl = make_plist(H5P_DATASET_CREATE, "creating a dataset property list");
+  check_status(H5Pset_obj_track_times(dcpl.get(), false), "switching off time tracking");
+  return dcpl;
+}
+
+Handle untimed_gcpl() {
+  Handle gcpl = make_plist(H5P_GROUP_CREATE, "creating a group property list");
+  check_status(H5Pset_obj_track_times(gcpl.get(), false), "switching off time tracking");
+  return gcpl;
+}
+
+// Collective: creates `name` under `group` and writes this rank's selection.
+void write_dataset(hid_t group, const std::string& name, hid_t file_type, hid_t mem_type,
+                   const void* data, const Selection& sel, hid_t dxpl) {
+  Handle dcpl = untimed_dcpl();
+  Handle shape(check(H5Scopy(sel.file.get()), "copying a dataspace"), H5Sclose);
+  check_status(H5Sselect_all(shape.get()), "selecting a dataspace");
+  Handle ds(check(H5Dcreate2(group, name.c_str(), file_type, shape.get(), H5P_DEFAULT, dcpl.get(),
+                             H5P_DEFAULT),
+                  "creating dataset '" + name + "'"),
+            H5Dclose);
+  static const double dummy = 0;  // some buffer, even where nothing is selected
+  const void* buf = sel.count > 0 && data ? data : &dummy;
+  check_status(H5Dwrite(ds.get(), mem_type, sel.mem.get(), sel.file.get(), dxpl, buf),
+               "writing dataset '" + name + "'");
+  ds.close("closing dataset '" + name + "'");
+}
+
+std::string frame_name(int step) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06d", step);
+  return buf;
+}
+
+// Shortest text that reads back as the same double.
+std::string number_text(double v) {
+  char buf[64];
+  auto res = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, res.ptr);
+}
+
+// -------------------------------------------------------------------- XDMF --
+
+struct FrameRecord {
+  int step;
+  double time;
+  bool tension, moment, shear, level;  // which optional datasets exist
+};
+
+class XdmfWriter {
+ public:
+  XdmfWriter(int ni, int nj) : ni_(ni), nj_(nj) {}
+
+  std::string document(const std::vector<FrameRecord>& frames) const {
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" ?>\n"
+      << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+      << "<Xdmf Version=\"3.0\">\n"
+      << " <Domain>\n"
+      << "  <Grid Name=\"drape\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (const FrameRecord& f : frames) grid(x, f);
+    x << "  </Grid>\n"
+      << " </Domain>\n"
+      << "</Xdmf>\n";
+    return x.str();
+  }
+
+ private:
+  int ni_, nj_;
+
+  std::string dims(int comps) const {
+    std::string d = std::to_string(ni_) + " " + std::to_string(nj_);
+    return comps > 0 ? d + " " + std::to_string(comps) : d;
+  }
+
+  static std::string item(const std::string& dims, const char* number, int precision,
+                          const std::string& path) {
+    return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"" + number + "\" Precision=\"" +
+           std::to_string(precision) + "\" Format=\"HDF\">drape.h5:" + path + "</DataItem>";
+  }
+
+  void grid(std::ostringstream& x, const FrameRecord& f) const {
+    const std::string dir = "/frames/" + frame_name(f.step) + "/";
+    const long nq = long(ni_ - 1) * (nj_ - 1);
+    x << "   <Grid Name=\"frame_" << frame_name(f.step) << "\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << number_text(f.time) << "\"/>\n"
+      << "    <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" << nq << "\">\n"
+      << "     " << item(std::to_string(nq) + " 4", "Int", 4, "/mesh/quads") << "\n"
+      << "    </Topology>\n"
+      << "    <Geometry GeometryType=\"XYZ\">\n"
+      << "     " << item(dims(3), "Float", 8, dir + "positions") << "\n"
+      << "    </Geometry>\n";
+    if (f.tension) {
+      component(x, "tension_warp", dir + "tension", 0);
+      component(x, "tension_weft", dir + "tension", 1);
+    }
+    if (f.moment) {
+      component(x, "moment_warp", dir + "moment", 0);
+      component(x, "moment_weft", dir + "moment", 1);
+    }
+    if (f.shear) scalar(x, "shear", item(dims(0), "Float", 8, dir + "shear"));
+    scalar(x, "active", item(dims(0), "UChar", 1, dir + "active"));
+    if (f.level) scalar(x, "level", item(dims(0), "UChar", 1, dir + "level"));
+    x << "   </Grid>\n";
+  }
+
+  static void scalar(std::ostringstream& x, const char* name, const std::string& data) {
+    x << "    <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+      << "     " << data << "\n"
+      << "    </Attribute>\n";
+  }
+
+  // One component of an (NI x NJ x 2) dataset as a node scalar: a HyperSlab
+  // (start, stride, count) keeps the file free of duplicated arrays.
+  void component(std::ostringstream& x, const char* name, const std::string& path, int c) const {
+    x << "    <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+      << "     <DataItem ItemType=\"HyperSlab\" Dimensions=\"" << dims(1) << "\" Type=\"HyperSlab\">\n"
+      << "      <DataItem Dimensions=\"3 3\" NumberType=\"Int\" Format=\"XML\">" << "0 0 " << c
+      << " 1 1 1 " << dims(1) << "</DataItem>\n"
+      << "      " << item(dims(2), "Float", 8, path) << "\n"
+      << "     </DataItem>\n"
+      << "    </Attribute>\n";
+  }
+};
+
+// Writes `text` to path.tmp and renames it to path.
+void write_file_atomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error("cannot write " + tmp);
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot rename " + tmp + " to " + path);
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- Impl --
+
+struct Hdf5Output::Impl {
+  std::string dir, tmp_path, final_path;
+  MPI_Comm comm = MPI_COMM_NULL;
+  int rank = 0;
+  int ni = 0, nj = 0;
+  Handle file, frames, dxpl;
+  std::vector<FrameRecord> records;
+  bool finished = false;
+
+  void open(const Scene& scene, const std::string& toml, const Fabric& fabric);
+  void write_quads();
+  void write(const FrameView& f);
+  void close_and_publish();
+  void abandon() noexcept;
+};
+
+void Hdf5Output::Impl::open(const Scene& scene, const std::string& toml, const Fabric& fabric) {
+  // Errors become exceptions with messages; HDF5's own stack printing would
+  // only repeat them, from every rank.
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  Handle fapl = make_plist(H5P_FILE_ACCESS, "creating a file access property list");
+  check_status(H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL), "selecting the MPI-IO driver");
+  // 1.8 object headers: large attributes (a long scene_toml) go to dense
+  // storage, and HDF5 1.8 and later can still read the file.
+  check_status(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18),
+               "setting the file format version");
+  file = Handle(check(H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
+                      "cannot create " + tmp_path),
+                H5Fclose);
+  dxpl = make_plist(H5P_DATASET_XFER, "creating a transfer property list");
+  check_status(H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE), "requesting collective I/O");
+
+  // Attributes are metadata: every rank writes the same values.
+  hid_t root = file.get();
+  put_string(root, "scene", scene.name);
+  put_string(root, "scene_toml", toml);
+  put_fabric(root, fabric);
+  put_obstacle(root, scene.obstacle);
+  put_int(root, "ni", ni);
+  put_int(root, "nj", nj);
+  put_string(root, "drape_version", DRAPE_VERSION);
+  put_string(root, "units", kUnits);
+
+  Handle gcpl = untimed_gcpl();
+  frames = Handle(check(H5Gcreate2(root, "frames", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
+                        "creating group /frames"),
+                  H5Gclose);
+  write_quads();
+}
+
+// Quad q = i*(NJ-1) + j: (i,j) (i+1,j) (i+1,j+1) (i,j+1), counter-clockwise
+// seen from +z when i runs along x and j along y. Rank 0 writes it all.
+void Hdf5Output::Impl::write_quads() {
+  Handle gcpl = untimed_gcpl();
+  Handle mesh(check(H5Gcreate2(file.get(), "mesh", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
+                    "creating group /mesh"),
+              H5Gclose);
+  const hsize_t nq = hsize_t(ni - 1) * hsize_t(nj - 1);
+  std::vector<int32_t> quads;
+  if (rank == 0) {
+    quads.reserve(nq * 4);
+    for (int i = 0; i + 1 < ni; ++i)
+      for (int j = 0; j + 1 < nj; ++j) {
+        const int32_t p = int32_t(i) * nj + j;
+        quads.insert(quads.end(), {p, p + nj, p + nj + 1, p + 1});
+      }
+  }
+  Selection sel{make_space({nq, 4}), make_space({nq, 4}), rank == 0 ? nq * 4 : 0};
+  if (rank != 0) {
+    check_status(H5Sselect_none(sel.file.get()), "selecting nothing");
+    check_status(H5Sselect_none(sel.mem.get()), "selecting nothing");
+  }
+  write_dataset(mesh.get(), "quads", H5T_STD_I32LE, H5T_NATIVE_INT32, quads.data(), sel,
+                dxpl.get());
+}
+
+void Hdf5Output::Impl::write(const FrameView& f) {
+  if (f.ni != ni || f.nj != nj)
+    throw std::runtime_error("HDF5 output: frame is " + std::to_string(f.ni) + "x" +
+                             std::to_string(f.nj) + ", file is " + std::to_string(ni) + "x" +
+                             std::to_string(nj));
+  if (!f.x || !f.flags) throw std::runtime_error("HDF5 output: frame without positions or flags");
+  // Optional arrays must be present on all ranks or on none: the dataset
+  // creation is collective.
+  const int mine = (f.tension ? 1 : 0) | (f.moment ? 2 : 0) | (f.shear ? 4 : 0) | (f.level ? 8 : 0);
+  int lo = 0, hi = 0;
+  MPI_Allreduce(&mine, &lo, 1, MPI_INT, MPI_BAND, comm);
+  MPI_Allreduce(&mine, &hi, 1, MPI_INT, MPI_BOR, comm);
+  if (lo != hi) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
+
+  const std::string name = frame_name(f.step);
+  Handle gcpl = untimed_gcpl();
+  Handle group(check(H5Gcreate2(frames.get(), name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
+                     "creating group /frames/" + name + " (was this step written before?)"),
+               H5Gclose);
+  put_int(group.get(), "step", f.step);
+  put_double(group.get(), "time", f.time);
+
+  // active and flags as whole-grid arrays, filled where this rank owns.
+  std::vector<uint8_t> active(size_t(ni) * nj, 0);
+  for (const Block& b : f.owned)
+    for (int i = b.i0; i < b.i1; ++i)
+      for (int j = b.j0; j < b.j1; ++j) {
+        const size_t p = size_t(i) * nj + j;
+        active[p] = f.flags[p] & kActive;
+      }
+
+  const Selection s1 = select_blocks(f.owned, ni, nj, 1);
+  const Selection s2 = select_blocks(f.owned, ni, nj, 2);
+  const Selection s3 = select_blocks(f.owned, ni, nj, 3);
+  const hid_t g = group.get(), x = dxpl.get();
+  const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c = H5T_NATIVE_UINT8;
+  write_dataset(g, "positions", f64, d, f.x, s3, x);
+  if (f.tension) write_dataset(g, "tension", f64, d, f.tension, s2, x);
+  if (f.moment) write_dataset(g, "moment", f64, d, f.moment, s2, x);
+  if (f.shear) write_dataset(g, "shear", f64, d, f.shear, s1, x);
+  write_dataset(g, "active", u8, c, active.data(), s1, x);
+  write_dataset(g, "flags", u8, c, f.flags, s1, x);
+  if (f.level) write_dataset(g, "level", u8, c, f.level, s1, x);
+  group.close("closing group /frames/" + name);
+  check_status(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "flushing " + tmp_path);
+  records.push_back({f.step, f.time, bool(f.tension), bool(f.moment), bool(f.shear),
+                     bool(f.level)});
+}
+
+void Hdf5Output::Impl::close_and_publish() {
+  frames.close("closing group /frames");
+  dxpl.reset();
+  file.close("closing " + tmp_path);  // collective: every rank's data is in
+  MPI_Barrier(comm);
+  // Rank 0 publishes both files; the others learn whether that worked.
+  char error[512] = {0};
+  if (rank == 0) {
+    try {
+      if (std::rename(tmp_path.c_str(), final_path.c_str()) != 0)
+        throw std::runtime_error("cannot rename " + tmp_path + " to " + final_path);
+      write_file_atomically(dir + "/drape.xdmf", XdmfWriter(ni, nj).document(records));
+    } catch (const std::exception& e) {
+      std::snprintf(error, sizeof error, "%s", e.what());
+    }
+  }
+  MPI_Bcast(error, sizeof error, MPI_CHAR, 0, comm);
+  finished = true;
+  if (error[0]) throw std::runtime_error(std::string("HDF5 output: ") + error);
+}
+
+// Collective, like the close it makes; removes the incomplete file.
+void Hdf5Output::Impl::abandon() noexcept {
+  frames.reset();
+  dxpl.reset();
+  file.reset();
+  if (rank == 0) std::remove(tmp_path.c_str());
+}
+
+// ------------------------------------------------------------ interface --
+
+Hdf5Output::Hdf5Output(const std::string& dir, MPI_Comm comm, const Scene& scene,
+                       const std::string& scene_toml, const Fabric& fabric, int ni, int nj)
+    : impl_(std::make_unique<Impl>()) {
+  if (ni < 2 || nj < 2) throw std::runtime_error("HDF5 output: the grid needs 2x2 particles at least");
+  Impl& m = *impl_;
+  m.dir = dir.empty() ? "." : dir;
+  m.tmp_path = m.dir + "/drape.h5.tmp";
+  m.final_path = m.dir + "/drape.h5";
+  m.comm = comm;
+  m.ni = ni;
+  m.nj = nj;
+  MPI_Comm_rank(comm, &m.rank);
+  try {
+    m.open(scene, scene_toml, fabric);
+  } catch (...) {
+    m.abandon();
+    throw;
+  }
+}
+
+Hdf5Output::~Hdf5Output() {
+  if (impl_ && !impl_->finished) impl_->abandon();
+}
+
+void Hdf5Output::write_frame(const FrameView& f) {
+  if (impl_->finished) throw std::runtime_error("HDF5 output: write_frame after finish");
+  impl_->write(f);
+}
+
+void Hdf5Output::finish() {
+  if (impl_->finished) return;
+  impl_->close_and_publish();
+}
+
+}  // namespace drape

@@ -1,0 +1,171 @@
+#include "solver/cg.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace drape {
+
+Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling& tiling,
+                     const Reducer& red)
+    : c_(cloth), lists_(lists), tiling_(tiling), red_(red) {
+  const size_t n = cloth.layout.size();
+  for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) v->assign(n, 0.0);
+  partials_.assign(tiling.count(), 0.0);
+}
+
+double Minimizer::dot(const double* a, const double* b) {
+  const Layout& L = c_.layout;
+  const int nj = c_.grid.nj;
+  const int nt = int(lists_.tiles.size());
+  // Blocks of z: (offset, unknowns per particle).
+  const int64_t off[4] = {L.x(), L.tension(), L.moment(), L.shear()};
+  const int per[4] = {3, 2, 2, 1};
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int t = 0; t < nt; ++t) {
+    const TileRange r = tiling_.range(lists_.tiles[t]);
+    double s = 0;
+    for (int blk = 0; blk < 4; ++blk)
+      for (int i = r.i0; i < r.i1; ++i) {
+        const int64_t lo = off[blk] + per[blk] * (int64_t(i) * nj + r.j0);
+        const int64_t hi = off[blk] + per[blk] * (int64_t(i) * nj + r.j1);
+        for (int64_t k = lo; k < hi; ++k) s += a[k] * b[k];
+      }
+    partials_[t] = s;
+  }
+  double out = 0;
+  red_.sum_tiles(lists_.tiles, partials_.data(), 1, &out);
+  return out;
+}
+
+CostTerms Minimizer::eval(Evaluator& ev, const double* z, double* g, bool numeric) {
+  return numeric ? ev.numeric_gradient(z, g) : ev.evaluate(z, g);
+}
+
+namespace {
+bool finite(const CostTerms& c) { return std::isfinite(c.total()); }
+}  // namespace
+
+CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
+                             const std::function<void(int, double)>& on_iteration) {
+  const int64_t n = c_.layout.size();
+  const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
+  double* g = g_.data();
+  double* gn = gn_.data();
+  double* s = s_.data();
+  double* d = d_.data();
+  double* zt = zt_.data();
+  const double* diag = diag_.data();
+  CgResult res;
+  {
+    ScopedPhase ph(tm, kScaling);
+    ev.scaling_diagonal(z, diag_.data());
+  }
+  {
+    ScopedPhase ph(tm, kGradient);
+    res.cost = eval(ev, z, g, st.numeric);
+  }
+  res.evaluations = 1;
+  double c0 = res.cost.total();
+  if (!std::isfinite(c0)) return res;  // the caller reports where
+  double gs;
+  {
+    ScopedPhase ph(tm, kVector);
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) {
+      s[k] = g[k] / diag[k];
+      d[k] = -s[k];
+    }
+    gs = dot(g, s);
+  }
+  int since_restart = 0;
+  bool steepest = true;
+  while (res.iterations < st.max_iterations) {
+    if (c0 * norm < st.tolerance) {
+      res.converged = true;
+      break;
+    }
+    double gd = dot(g, d);
+    if (!(gd < 0)) {  // not a descent direction: restart
+#pragma omp parallel for schedule(static)
+      for (int64_t k = 0; k < n; ++k) d[k] = -s[k];
+      gd = -gs;
+      steepest = true;
+    }
+    if (!(gd < 0)) {  // zero gradient
+      res.converged = c0 * norm < st.tolerance;
+      res.stalled = !res.converged;
+      break;
+    }
+    // Armijo backtracking with quadratic interpolation.
+    double a = alpha_, ct = 0, dn = 0;
+    bool ok = false;
+    for (int tries = 0; tries < 30; ++tries) {
+      {
+        ScopedPhase ph(tm, kVector);
+#pragma omp parallel for schedule(static)
+        for (int64_t k = 0; k < n; ++k) zt[k] = z[k] + a * d[k];
+      }
+      CostTerms trial;
+      {
+        ScopedPhase ph(tm, tries == 0 ? kGradient : kLineSearch);
+        trial = eval(ev, zt, gn, st.numeric);
+      }
+      ++res.evaluations;
+      ct = trial.total();
+      if (finite(trial) && ct <= c0 + 1e-4 * a * gd && ct < c0) {
+        res.cost = trial;
+        ok = true;
+        break;
+      }
+      // Minimiser of the parabola through c0, gd and ct, kept within [a/10, a/2].
+      double an = std::isfinite(ct) ? -gd * a * a / (2.0 * (ct - c0 - gd * a)) : 0.1 * a;
+      if (!(an > 0.1 * a)) an = 0.1 * a;
+      a = std::min(an, 0.5 * a);
+    }
+    if (!ok) {
+      if (steepest) {
+        res.stalled = true;
+        break;
+      }
+      // Retry along steepest descent once.
+#pragma omp parallel for schedule(static)
+      for (int64_t k = 0; k < n; ++k) d[k] = -s[k];
+      steepest = true;
+      alpha_ = 1.0;
+      continue;
+    }
+    ScopedPhase ph(tm, kVector);
+    dn = dot(gn, d);
+    // Next first trial: the secant estimate of the line minimum.
+    const double sec = (dn - gd) > 0 ? a * (-gd) / (dn - gd) : 4.0 * a;
+    alpha_ = std::clamp(sec, 0.1 * a, 10.0 * a);
+    // Copy rather than swap: z is the caller's array and stays current.
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) z[k] = zt[k];
+    std::swap(g, gn);
+    const double gs_old = gs;
+    const double g_sold = dot(g, s);
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) s[k] = g[k] / diag[k];
+    gs = dot(g, s);
+    double beta = std::max(0.0, (gs - g_sold) / gs_old);
+    if (++since_restart >= st.restart_every) {
+      beta = 0;
+      since_restart = 0;
+    }
+    steepest = beta == 0;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) d[k] = -s[k] + beta * d[k];
+    c0 = ct;
+    ++res.iterations;
+    if (on_iteration) on_iteration(res.iterations, c0);
+  }
+  if (c0 * norm < st.tolerance) res.converged = true;
+  res.cost_per_particle = c0 * norm;
+  // g may now point into gn_: make g_ hold the latest gradient for callers.
+  if (g != g_.data()) std::swap(g_, gn_);
+  return res;
+}
+
+}  // namespace drape

@@ -1,0 +1,52 @@
+#pragma once
+// Nonlinear conjugate gradient (Polak-Ribiere+, diagonally scaled) with an
+// Armijo line search and restarts: the minimizer of the paper's Algorithm 1.
+// Dot products are summed per tile in a fixed order (DESIGN §3).
+#include <functional>
+#include <vector>
+
+#include "solver/cost.hpp"
+#include "solver/timers.hpp"
+
+namespace drape {
+
+struct CgSettings {
+  int max_iterations = 200;
+  double tolerance = 1e-6;   // on the cost per free particle
+  int restart_every = 50;    // steepest-descent restart period
+  bool numeric = false;      // finite-difference gradient (reference mode)
+  int64_t free_particles = 1;  // global count, normalises the cost
+};
+
+struct CgResult {
+  int iterations = 0;
+  int evaluations = 0;
+  bool converged = false;
+  bool stalled = false;  // no descent possible (at machine precision)
+  CostTerms cost;
+  double cost_per_particle = 0;
+};
+
+class Minimizer {
+ public:
+  Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling& tiling, const Reducer& red);
+
+  // Minimizes from z in place. on_iteration(iteration, cost) after each step.
+  CgResult minimize(Evaluator& ev, double* z, const CgSettings& s, Timers& timers,
+                    const std::function<void(int, double)>& on_iteration = {});
+
+  // Tile-ordered dot products (exposed for tests).
+  double dot(const double* a, const double* b);
+
+ private:
+  CostTerms eval(Evaluator& ev, const double* z, double* g, bool numeric);
+
+  const Cloth& c_;
+  const ActiveLists& lists_;
+  const Tiling& tiling_;
+  const Reducer& red_;
+  std::vector<double> g_, gn_, s_, d_, zt_, diag_, partials_;
+  double alpha_ = 1.0;  // first trial step, carried from one iteration to the next
+};
+
+}  // namespace drape

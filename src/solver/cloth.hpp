@@ -1,0 +1,79 @@
+#pragma once
+// The cloth laid out on the finest grid, once, for the whole run (DESIGN §2):
+// particle p = i*NJ + j; element slots hang off their first particle:
+//   edge   slot 2p+d: p -> next particle along direction d (0 warp/i, 1 weft/j)
+//   triple slot 2p+d: prev -> p -> next along d (bending at p)
+//   shear  slot p   : the corner between p's warp and weft edges
+// AMRC switches slots on and off; nothing is reallocated during a run.
+//
+// The unknowns live in one vector z = [x (3N) | tension (2N) | moment (2N) |
+// shear (N)] so the minimizer works on a single array.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace drape {
+
+enum ParticleFlag : uint8_t {
+  kActive = 1,   // part of the active mesh
+  kFixed = 2,    // position prescribed (clamped), not an unknown
+  kHanging = 4,  // AMRC hanging particle: interpolated, not solved for
+};
+
+struct Grid {
+  int ni = 0, nj = 0;  // particles along i (warp) and j (weft)
+  double hi = 0, hj = 0;  // rest spacing along i and j, m
+  int64_t n() const { return int64_t(ni) * nj; }
+  int64_t id(int i, int j) const { return int64_t(i) * nj + j; }
+  int i_of(int64_t p) const { return int(p / nj); }
+  int j_of(int64_t p) const { return int(p % nj); }
+  double h(int d) const { return d == 0 ? hi : hj; }
+  // Step in p along direction d.
+  int64_t stride(int d) const { return d == 0 ? nj : 1; }
+};
+
+// Offsets of the unknown blocks in z.
+struct Layout {
+  int64_t n = 0;
+  int64_t x() const { return 0; }
+  int64_t tension() const { return 3 * n; }
+  int64_t moment() const { return 5 * n; }
+  int64_t shear() const { return 7 * n; }
+  int64_t size() const { return 8 * n; }
+};
+
+struct Cloth {
+  Grid grid;
+  Layout layout;
+  std::vector<double> z;         // unknowns (see Layout)
+  std::vector<double> x1, x2;    // positions at the start of this step and the one before
+  std::vector<double> mass;      // kg per particle: density * area it represents
+  std::vector<uint8_t> flags;    // ParticleFlag per particle
+  std::vector<uint8_t> level;    // AMRC level of the particle's finest leaf (0: finest)
+  // Neighbour tables over the active mesh: next/prev active particle along d, -1 at a border.
+  std::vector<int64_t> next[2], prev[2];
+  // Element slot switches (1 = active element).
+  std::vector<uint8_t> edge_on, triple_on, shear_on;
+  // Per triple: the bending reference axis (unit, 3 per slot), frozen for a step.
+  std::vector<double> bend_axis;
+  // Rest geometry per slot, from the active mesh: rest length and the width
+  // (edges, triples) or area (shear corners) the element stands for.
+  std::vector<double> edge_rest, edge_width, triple_rest, triple_width, shear_area, shear_rest;
+  double time = 0, dt = 1e-3, dt_prev = 1e-3;
+  int step = 0;
+
+  double* x() { return z.data(); }
+  const double* x() const { return z.data(); }
+  double* tension() { return z.data() + layout.tension(); }
+  const double* tension() const { return z.data() + layout.tension(); }
+  double* moment() { return z.data() + layout.moment(); }
+  const double* moment() const { return z.data() + layout.moment(); }
+  double* shear() { return z.data() + layout.shear(); }
+  const double* shear() const { return z.data() + layout.shear(); }
+
+  bool active(int64_t p) const { return flags[p] & kActive; }
+  bool free(int64_t p) const { return (flags[p] & (kActive | kFixed | kHanging)) == kActive; }
+  double total_mass() const;
+};
+
+}  // namespace drape

@@ -1,0 +1,105 @@
+#include "solver/contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drape {
+
+double box_distance(const Obstacle& o, const double* x, double* n, double* hess) {
+  double q[3], s[3];
+  for (int k = 0; k < 3; ++k) {
+    const double r = x[k] - o.center[k];
+    s[k] = r >= 0 ? 1.0 : -1.0;
+    q[k] = std::fabs(r) - o.half[k];
+  }
+  if (hess) std::fill(hess, hess + 9, 0.0);
+  const double qmax = std::max({q[0], q[1], q[2]});
+  if (qmax <= 0) {  // inside: nearest face decides, flat there
+    const int k = int(std::max_element(q, q + 3) - q);
+    n[0] = n[1] = n[2] = 0;
+    n[k] = s[k];
+    return qmax;
+  }
+  double o3[3], d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    o3[k] = std::max(q[k], 0.0);
+    d2 += o3[k] * o3[k];
+  }
+  const double d = std::sqrt(d2);
+  for (int k = 0; k < 3; ++k) n[k] = s[k] * o3[k] / d;
+  if (hess) {  // (D - n n^T)/d, D selecting the axes outside the slab
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        hess[3 * a + b] = ((a == b && q[a] > 0) ? 1.0 : 0.0) - n[a] * n[b];
+    for (int k = 0; k < 9; ++k) hess[k] /= d;
+  }
+  return d;
+}
+
+double sphere_distance(const Obstacle& o, const double* x, double* n, double* hess) {
+  double r[3], d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    r[k] = x[k] - o.center[k];
+    d2 += r[k] * r[k];
+  }
+  const double len = std::sqrt(d2);
+  for (int k = 0; k < 3; ++k) n[k] = len > 0 ? r[k] / len : (k == 2 ? 1.0 : 0.0);
+  if (hess) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) hess[3 * a + b] = ((a == b) - n[a] * n[b]) / std::max(len, 1e-300);
+  }
+  return len - o.radius;
+}
+
+namespace {
+
+// Adds the penalty of one surface: F = k*(delta-d)*n; -(dF/dx)^T r =
+// k*(n (n.r) - (delta-d) H r).
+bool add_surface(const Contact& c, double d, const double* n, const double* hess, double* force,
+                 const double* r, double* jtr) {
+  const double pen = c.thickness - d;
+  if (pen <= 0) return false;
+  for (int k = 0; k < 3; ++k) force[k] += c.stiffness * pen * n[k];
+  if (jtr) {
+    const double nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    for (int a = 0; a < 3; ++a) {
+      double hr = 0;
+      if (hess)
+        for (int b = 0; b < 3; ++b) hr += hess[3 * a + b] * r[b];
+      jtr[a] += c.stiffness * (n[a] * nr - pen * hr);
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool contact_force(const Contact& c, const double* x, double* force, const double* r,
+                   double* jac_t_r) {
+  force[0] = force[1] = force[2] = 0;
+  bool hit = false;
+  const Obstacle& o = c.obstacle;
+  double n[3], hess[9];
+  if (o.shape == ObstacleShape::Box) {
+    const double d = box_distance(o, x, n, hess);
+    hit |= add_surface(c, d, n, hess, force, r, jac_t_r);
+  } else if (o.shape == ObstacleShape::Sphere) {
+    const double d = sphere_distance(o, x, n, hess);
+    hit |= add_surface(c, d, n, hess, force, r, jac_t_r);
+  }
+  if (o.floor) {
+    const double nz[3] = {0, 0, 1};
+    hit |= add_surface(c, x[2] - o.floor_z, nz, nullptr, force, r, jac_t_r);
+  }
+  return hit;
+}
+
+double penetration(const Obstacle& o, const double* x) {
+  double n[3], depth = 0;
+  if (o.shape == ObstacleShape::Box) depth = std::max(depth, -box_distance(o, x, n, nullptr));
+  if (o.shape == ObstacleShape::Sphere) depth = std::max(depth, -sphere_distance(o, x, n, nullptr));
+  if (o.floor) depth = std::max(depth, o.floor_z - x[2]);
+  return depth;
+}
+
+}  // namespace drape

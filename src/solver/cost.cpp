@@ -1,0 +1,396 @@
+#include "solver/cost.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "solver/kernels.hpp"
+
+namespace drape {
+
+namespace {
+using V = V3<double>;
+inline V at(const double* z, int64_t p) { return load3<double>(z + 3 * p); }
+inline void put(double* out, const V& v, double s) {
+  out[0] = s * v.x;
+  out[1] = s * v.y;
+  out[2] = s * v.z;
+}
+}  // namespace
+
+Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists,
+                     const Tiling& tiling, const LoopPolicy& policy, const Reducer& reducer)
+    : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer) {
+  const int64_t n = cloth.grid.n();
+  buf_e_.assign(2 * n * 6, 0.0);
+  buf_t_.assign(2 * n * 9, 0.0);
+  buf_s_.assign(n * 9, 0.0);
+  cost_p_.assign(n, 0.0);
+  cost_e_.assign(2 * n, 0.0);
+  cost_t_.assign(2 * n, 0.0);
+  cost_s_.assign(n, 0.0);
+  gq_e_.assign(2 * n, 0.0);
+  gq_t_.assign(2 * n, 0.0);
+  gq_s_.assign(n, 0.0);
+  gf_e_.assign(2 * n, 0.0);
+  gf_t_.assign(2 * n, 0.0);
+  gf_s_.assign(n, 0.0);
+  rho_.assign(3 * n, 0.0);
+  partials_.assign(4 * size_t(tiling.count()), 0.0);
+}
+
+// ---- pass 1: element forces and band costs -------------------------------
+
+void Evaluator::edge_forces(int64_t s, const double* z) {
+  const int64_t p = s >> 1;
+  const int d = int(s & 1);
+  const int64_t q = c_.next[d][p];
+  V g[2];
+  const double L = edge_length(at(z, p), at(z, q), g);
+  const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
+  const double f = z[c_.layout.tension() + s];
+  put(&buf_e_[6 * s], g[0], f * w);
+  put(&buf_e_[6 * s + 3], g[1], f * w);
+  const BandExcess ex = m_.use_stretch ? m_.stretch[d].excess(f, L / L0 - 1.0) : BandExcess{};
+  const double lam = w / m_.force_scale;
+  const double sigma = ex.r * lam;
+  cost_e_[s] = 0.5 * sigma * sigma;
+  gq_e_[s] = sigma * lam * ex.dr_dq / L0;
+  gf_e_[s] = sigma * lam;
+}
+
+void Evaluator::triple_forces(int64_t s, const double* z) {
+  const int64_t p = s >> 1;
+  const int d = int(s & 1);
+  V g[3];
+  const V n = load3<double>(&c_.bend_axis[3 * s]);
+  const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]), n, g);
+  const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
+  const double f = z[c_.layout.moment() + s];
+  for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], g[k], f * w);
+  const BandExcess ex = m_.use_bend ? m_.bend[d].excess(f, th / Lm) : BandExcess{};
+  const double lam = w / (Lm * m_.force_scale);
+  const double sigma = ex.r * lam;
+  cost_t_[s] = 0.5 * sigma * sigma;
+  gq_t_[s] = sigma * lam * ex.dr_dq / Lm;
+  gf_t_[s] = sigma * lam;
+}
+
+void Evaluator::shear_forces(int64_t s, const double* z) {
+  V g[3];
+  const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
+  const double A = c_.shear_area[s];
+  const double f = z[c_.layout.shear() + s];
+  for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], g[k], f * A);
+  const BandExcess ex = m_.use_shear ? m_.shear.excess(f, phi) : BandExcess{};
+  const double lam = A / (c_.shear_rest[s] * m_.force_scale);
+  const double sigma = ex.r * lam;
+  cost_s_[s] = 0.5 * sigma * sigma;
+  gq_s_[s] = sigma * lam * ex.dr_dq;
+  gf_s_[s] = sigma * lam;
+}
+
+// Visits the per-slot buffer entries that belong to particle p, always in the
+// same order: this fixed order is what makes the sums reproducible.
+template <class Add>
+void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
+                       const std::vector<double>& s, Add&& add) const {
+  for (int d = 0; d < 2; ++d) {
+    const int64_t pv = c_.prev[d][p], nx = c_.next[d][p];
+    if (c_.edge_on[2 * p + d]) add(&e[6 * (2 * p + d)]);
+    if (pv >= 0 && c_.edge_on[2 * pv + d]) add(&e[6 * (2 * pv + d) + 3]);
+    if (nx >= 0 && c_.triple_on[2 * nx + d]) add(&t[9 * (2 * nx + d)]);
+    if (c_.triple_on[2 * p + d]) add(&t[9 * (2 * p + d) + 3]);
+    if (pv >= 0 && c_.triple_on[2 * pv + d]) add(&t[9 * (2 * pv + d) + 6]);
+  }
+  if (c_.shear_on[p]) add(&s[9 * p]);
+  const int64_t q0 = c_.prev[0][p], q1 = c_.prev[1][p];
+  if (q0 >= 0 && c_.shear_on[q0]) add(&s[9 * q0 + 3]);
+  if (q1 >= 0 && c_.shear_on[q1]) add(&s[9 * q1 + 6]);
+}
+
+// ---- pass 2: Newton residual per free particle ---------------------------
+
+void Evaluator::particle_residual(int64_t p, const double* z) {
+  double* rho = &rho_[3 * p];
+  if (!m_.use_newton) {
+    rho[0] = rho[1] = rho[2] = 0;
+    cost_p_[p] = 0;
+    return;
+  }
+  const double* x = z + 3 * p;
+  const double* x1 = &c_.x1[3 * p];
+  const double* x2 = &c_.x2[3 * p];
+  const double ca = m_.accel_coeff(), ratio = m_.dt / m_.dt_prev, mass = c_.mass[p];
+  double fc[3];
+  contact_force(m_.contact, x, fc);
+  double r[3];
+  for (int k = 0; k < 3; ++k)
+    r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) - m_.gravity[k]) - fc[k];
+  gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) {
+    r[0] += v[0];
+    r[1] += v[1];
+    r[2] += v[2];
+  });
+  const double inv = 1.0 / m_.force_scale;
+  for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
+  cost_p_[p] = 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
+}
+
+// ---- pass 3: element gradient contributions ------------------------------
+
+namespace {
+inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) {
+  return c.free(p) ? load3<double>(&rho[3 * p]) : V{0, 0, 0};
+}
+}  // namespace
+
+void Evaluator::edge_gradient(int64_t s, const double* z, double* grad) {
+  const int64_t p = s >> 1;
+  const int d = int(s & 1);
+  const int64_t q = c_.next[d][p];
+  V g[2];
+  const V xa = at(z, p), xb = at(z, q);
+  const double L = edge_length(xa, xb, g);
+  const double w = c_.edge_width[s], f = z[c_.layout.tension() + s];
+  const V ra = residual_of(c_, rho_, p), rb = residual_of(c_, rho_, q);
+  // Hessian of the length times (rb - ra): (v - u (u.v)) / L.
+  const V v = rb - ra;
+  const V hv = (1.0 / L) * (v - dot(g[1], v) * g[1]);
+  const double fw = f * w / m_.force_scale, gq = gq_e_[s];
+  put(&buf_e_[6 * s], (-fw) * hv + gq * g[0], 1.0);
+  put(&buf_e_[6 * s + 3], fw * hv + gq * g[1], 1.0);
+  grad[c_.layout.tension() + s] = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[s];
+}
+
+void Evaluator::triple_gradient(int64_t s, const double* z, double* grad) {
+  const int64_t p = s >> 1;
+  const int d = int(s & 1);
+  const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
+  V r[3];
+  V3<Dual> xd[3];
+  for (int k = 0; k < 3; ++k) {
+    r[k] = residual_of(c_, rho_, ids[k]);
+    const double rv[3] = {r[k].x, r[k].y, r[k].z};
+    xd[k] = load3(z + 3 * ids[k], rv);
+  }
+  const V3<Dual> n = load3<Dual>(&c_.bend_axis[3 * s]);
+  V3<Dual> gd[3];
+  bend_angle(xd[0], xd[1], xd[2], n, gd);
+  const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
+  const double fw = f * w / m_.force_scale, gq = gq_t_[s];
+  double gr = 0;
+  for (int k = 0; k < 3; ++k) {
+    const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
+    put(&buf_t_[9 * s + 3 * k], fw * hr + gq * g, 1.0);
+    gr += dot(g, r[k]);
+  }
+  grad[c_.layout.moment() + s] = w * gr / m_.force_scale + gf_t_[s];
+}
+
+void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
+  const int64_t ids[3] = {s, c_.next[0][s], c_.next[1][s]};
+  V r[3];
+  V3<Dual> xd[3];
+  for (int k = 0; k < 3; ++k) {
+    r[k] = residual_of(c_, rho_, ids[k]);
+    const double rv[3] = {r[k].x, r[k].y, r[k].z};
+    xd[k] = load3(z + 3 * ids[k], rv);
+  }
+  V3<Dual> gd[3];
+  shear_angle(xd[0], xd[1], xd[2], gd);
+  const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
+  const double fa = f * A / m_.force_scale, gq = gq_s_[s];
+  double gr = 0;
+  for (int k = 0; k < 3; ++k) {
+    const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
+    put(&buf_s_[9 * s + 3 * k], fa * hr + gq * g, 1.0);
+    gr += dot(g, r[k]);
+  }
+  grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[s];
+}
+
+// ---- pass 4: gather per free particle ------------------------------------
+
+void Evaluator::particle_gradient(int64_t p, const double* z, double* grad) {
+  const double* rho = &rho_[3 * p];
+  double g[3] = {0, 0, 0};
+  if (m_.use_newton) {
+    double fc[3], jtr[3] = {0, 0, 0};
+    contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
+    const double mca = c_.mass[p] * m_.accel_coeff();
+    for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
+  }
+  gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) {
+    g[0] += v[0];
+    g[1] += v[1];
+    g[2] += v[2];
+  });
+  for (int k = 0; k < 3; ++k) grad[3 * p + k] = g[k];
+}
+
+// ---- driver ---------------------------------------------------------------
+
+CostTerms Evaluator::reduce_costs() {
+  const size_t nt = lists_.tiles.size();
+  double* out = partials_.data();
+  tile_sums(lists_.particles, [&](int64_t p) { return cost_p_[p]; }, out);
+  tile_sums(lists_.edges, [&](int64_t s) { return cost_e_[s]; }, out + nt);
+  tile_sums(lists_.triples, [&](int64_t s) { return cost_t_[s]; }, out + 2 * nt);
+  tile_sums(lists_.shears, [&](int64_t s) { return cost_s_[s]; }, out + 3 * nt);
+  double sums[4];
+  red_.sum_tiles(lists_.tiles, out, 4, sums);
+  return {sums[0], sums[1], sums[2], sums[3]};
+}
+
+CostTerms Evaluator::evaluate(const double* z, double* grad) {
+  for_each_item(lists_.edges, pol_, [&](int64_t s) { edge_forces(s, z); });
+  for_each_item(lists_.triples, pol_, [&](int64_t s) { triple_forces(s, z); });
+  for_each_item(lists_.shears, pol_, [&](int64_t s) { shear_forces(s, z); });
+  for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_residual(p, z); });
+  const CostTerms cost = reduce_costs();
+  if (!grad) return cost;
+  const int64_t nz = c_.layout.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < nz; ++k) grad[k] = 0.0;
+  for_each_item(lists_.edges, pol_, [&](int64_t s) { edge_gradient(s, z, grad); });
+  for_each_item(lists_.triples, pol_, [&](int64_t s) { triple_gradient(s, z, grad); });
+  for_each_item(lists_.shears, pol_, [&](int64_t s) { shear_gradient(s, z, grad); });
+  for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_gradient(p, z, grad); });
+  return cost;
+}
+
+// ---- diagonal scaling -----------------------------------------------------
+
+void Evaluator::scaling_diagonal(const double* z, double* diag) {
+  const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
+  const int64_t nz = c_.layout.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < nz; ++k) diag[k] = 1.0;
+  // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
+  // band stiffness (lambda * slope * dq/dx)^2, written to the first entry of
+  // the particle's buffer slot; the element force's own diagonal directly.
+  auto band_slope = [](const Band& b, double q) {
+    const BandValue v = b.at(q);
+    return std::max(std::fabs(v.dlo), std::fabs(v.dhi));
+  };
+  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    const int64_t q = c_.next[d][p];
+    V g[2];
+    const double L = edge_length(at(z, p), at(z, q), g);
+    const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
+    const double geo = f * w / L, band = w * band_slope(m_.stretch[d], L / L0 - 1) / L0;
+    for (int k = 0; k < 2; ++k) buf_e_[6 * s + 3 * k] = (2 * geo * geo + band * band) * inv2;
+    const double nf = double(c_.free(p)) + double(c_.free(q));
+    diag[c_.layout.tension() + s] = (w * w * nf + w * w) * inv2;
+  });
+  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
+    V g[3];
+    const V n = load3<double>(&c_.bend_axis[3 * s]);
+    const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
+    const double Lm = c_.triple_rest[s], w = c_.triple_width[s], f = z[c_.layout.moment() + s];
+    const double slope = band_slope(m_.bend[d], th / Lm) * w / (Lm * Lm);
+    double nf = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double g2 = dot(g[k], g[k]);
+      const double geo = f * w * std::sqrt(g2) / Lm;
+      buf_t_[9 * s + 3 * k] = (3 * geo * geo + slope * slope * g2) * inv2;
+      nf += c_.free(ids[k]) ? g2 : 0;
+    }
+    const double lam = w / Lm;
+    diag[c_.layout.moment() + s] = (w * w * nf + lam * lam) * inv2;
+  });
+  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+    const int64_t ids[3] = {s, c_.next[0][s], c_.next[1][s]};
+    V g[3];
+    const double phi = shear_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), g);
+    const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
+    const double slope = band_slope(m_.shear, phi) * A / Lr;
+    double nf = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double g2 = dot(g[k], g[k]);
+      const double geo = f * A * std::sqrt(g2) / Lr;
+      buf_s_[9 * s + 3 * k] = (3 * geo * geo + slope * slope * g2) * inv2;
+      nf += c_.free(ids[k]) ? g2 : 0;
+    }
+    const double lam = A / Lr;
+    diag[c_.layout.shear() + s] = (A * A * nf + lam * lam) * inv2;
+  });
+  const double ca = m_.accel_coeff();
+  for_each_item(lists_.particles, pol_, [&](int64_t p) {
+    double fc[3];
+    const bool touching = contact_force(m_.contact, z + 3 * p, fc);
+    const double inertia = c_.mass[p] * ca + (touching ? m_.contact.stiffness : 0.0);
+    double dsum = inertia * inertia * inv2;
+    gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) { dsum += v[0]; });
+    for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
+  });
+}
+
+// ---- numeric gradient (reference mode) ------------------------------------
+
+// Cost of the terms that one unknown at (ic, jc) can change: element forces
+// are refreshed three particles around it, residuals and band costs two.
+double Evaluator::window_cost(const double* z, int ic, int jc) {
+  const Grid& gr = c_.grid;
+  for (int i = std::max(0, ic - 3); i <= std::min(gr.ni - 1, ic + 3); ++i)
+    for (int j = std::max(0, jc - 3); j <= std::min(gr.nj - 1, jc + 3); ++j) {
+      const int64_t p = gr.id(i, j);
+      for (int d = 0; d < 2; ++d) {
+        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, z);
+        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, z);
+      }
+      if (c_.shear_on[p]) shear_forces(p, z);
+    }
+  double sum = 0;
+  for (int i = std::max(0, ic - 2); i <= std::min(gr.ni - 1, ic + 2); ++i)
+    for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
+      const int64_t p = gr.id(i, j);
+      if (c_.free(p)) {
+        particle_residual(p, z);
+        sum += cost_p_[p];
+      }
+      for (int d = 0; d < 2; ++d) {
+        if (c_.edge_on[2 * p + d]) sum += cost_e_[2 * p + d];
+        if (c_.triple_on[2 * p + d]) sum += cost_t_[2 * p + d];
+      }
+      if (c_.shear_on[p]) sum += cost_s_[p];
+    }
+  return sum;
+}
+
+CostTerms Evaluator::numeric_gradient(const double* z, double* grad) {
+  const CostTerms cost = evaluate(z, nullptr);
+  const int64_t nz = c_.layout.size();
+  zwork_.assign(z, z + nz);
+  std::fill(grad, grad + nz, 0.0);
+  const Grid& gr = c_.grid;
+  const double hmin = std::min(gr.hi, gr.hj), F0 = m_.force_scale;
+  auto diff = [&](int64_t u, int64_t p, double scale) {
+    const double h = 1e-6 * (std::fabs(z[u]) + scale);
+    zwork_[u] = z[u] + h;
+    const double cp = window_cost(zwork_.data(), gr.i_of(p), gr.j_of(p));
+    zwork_[u] = z[u] - h;
+    const double cm = window_cost(zwork_.data(), gr.i_of(p), gr.j_of(p));
+    zwork_[u] = z[u];
+    grad[u] = (cp - cm) / (2 * h);
+  };
+  for (int64_t p : lists_.particles.items)
+    for (int k = 0; k < 3; ++k) diff(3 * p + k, p, hmin);
+  for (int64_t s : lists_.edges.items)
+    diff(c_.layout.tension() + s, s >> 1, F0 / c_.edge_width[s]);
+  for (int64_t s : lists_.triples.items)
+    diff(c_.layout.moment() + s, s >> 1, F0 * c_.triple_rest[s] / c_.triple_width[s]);
+  for (int64_t s : lists_.shears.items)
+    diff(c_.layout.shear() + s, s, F0 * c_.shear_rest[s] / c_.shear_area[s]);
+  // Leave the buffers as evaluate() would have: at z.
+  evaluate(z, nullptr);
+  return cost;
+}
+
+}  // namespace drape

@@ -1,0 +1,81 @@
+#pragma once
+// The total cost of DESIGN §1 and its analytic gradient:
+//   Newton:  1/2 sum_p |r_p / F0|^2,  r_p = m(a - g) - F_contact + sum_e f_e c_e dk_e/dx_p
+//   bands:   1/2 sum_e (excess_e * lambda_e / F0)^2   (stretch, bend, shear)
+// Unknowns: positions of free particles and the force of every active element.
+//
+// Evaluation runs in passes over the active lists; elements write their
+// contributions into per-slot buffers and each particle gathers its own in a
+// fixed order, so no two threads write one value (no atomics) and results are
+// the same for any thread count or schedule.
+#include <cstdint>
+#include <vector>
+
+#include "amrc/active_lists.hpp"
+#include "solver/cloth.hpp"
+#include "solver/loops.hpp"
+#include "solver/model.hpp"
+#include "solver/reducer.hpp"
+
+namespace drape {
+
+struct CostTerms {
+  double newton = 0, stretch = 0, bend = 0, shear = 0;
+  double total() const { return newton + stretch + bend + shear; }
+};
+
+class Evaluator {
+ public:
+  Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists, const Tiling& tiling,
+            const LoopPolicy& policy, const Reducer& reducer);
+
+  // Cost at z; the gradient too if grad is non-null (entries of unknowns that
+  // are not free — fixed, inactive — are set to zero).
+  CostTerms evaluate(const double* z, double* grad);
+
+  // Reference gradient by central differences, unknown by unknown, each from
+  // the cost of the patch of the mesh it can change (the paper's approach).
+  CostTerms numeric_gradient(const double* z, double* grad);
+
+  // Approximate diagonal of J^T J (cost = 1/2 |residuals|^2): the diagonal
+  // scaling of the unknowns. Entries of non-unknowns are set to 1.
+  void scaling_diagonal(const double* z, double* diag);
+
+  // Per-slot bending cost of the last evaluate() (the AMRC criterion).
+  const std::vector<double>& triple_cost() const { return cost_t_; }
+  // Newton residual (scaled, 3 per particle) of the last evaluate().
+  const std::vector<double>& residual() const { return rho_; }
+
+  const ActiveLists& lists() const { return lists_; }
+
+ private:
+  void edge_forces(int64_t s, const double* z);
+  void triple_forces(int64_t s, const double* z);
+  void shear_forces(int64_t s, const double* z);
+  void particle_residual(int64_t p, const double* z);
+  void edge_gradient(int64_t s, const double* z, double* grad);
+  void triple_gradient(int64_t s, const double* z, double* grad);
+  void shear_gradient(int64_t s, const double* z, double* grad);
+  void particle_gradient(int64_t p, const double* z, double* grad);
+  template <class Add>
+  void gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
+              const std::vector<double>& s, Add&& add) const;
+  CostTerms reduce_costs();
+  double window_cost(const double* z, int ic, int jc);
+
+  const Cloth& c_;
+  const Model& m_;
+  const ActiveLists& lists_;
+  const Tiling& tiling_;
+  const LoopPolicy& pol_;
+  const Reducer& red_;
+  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-slot contributions to particles (6, 9, 9)
+  std::vector<double> cost_p_, cost_e_, cost_t_, cost_s_;
+  std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
+  std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
+  std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
+  std::vector<double> partials_;                  // 4 rows x owned tiles
+  std::vector<double> zwork_;                     // numeric gradient's perturbed copy
+};
+
+}  // namespace drape

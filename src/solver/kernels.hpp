@@ -1,0 +1,86 @@
+#pragma once
+// Per-element kinematics, kept apart from the loops that drive them (AMReX
+// style). Each kernel returns the element's kinematic measure k (edge length,
+// bending angle, shear angle) and writes dk/dx for each of its particles.
+// Templated on the scalar so that a Dual argument gives H*v in the eps part.
+#include <cmath>
+
+#include "solver/dual.hpp"
+
+namespace drape {
+
+template <class T>
+struct V3 {
+  T x, y, z;
+};
+template <class T>
+inline V3<T> operator+(const V3<T>& a, const V3<T>& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+template <class T>
+inline V3<T> operator-(const V3<T>& a, const V3<T>& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+template <class T>
+inline V3<T> operator*(T s, const V3<T>& a) { return {s * a.x, s * a.y, s * a.z}; }
+template <class T>
+inline T dot(const V3<T>& a, const V3<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+template <class T>
+inline V3<T> cross(const V3<T>& a, const V3<T>& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+template <class T>
+inline V3<T> load3(const double* p) { return {T(p[0]), T(p[1]), T(p[2])}; }
+inline V3<Dual> load3(const double* p, const double* v) {
+  return {Dual(p[0], v[0]), Dual(p[1], v[1]), Dual(p[2], v[2])};
+}
+template <class T>
+inline void store3(const V3<T>& a, T* out) { out[0] = a.x; out[1] = a.y; out[2] = a.z; }
+
+// Edge a-b: k = |xb - xa|; grad = [-u, u].
+template <class T>
+inline T edge_length(const V3<T>& a, const V3<T>& b, V3<T> g[2]) {
+  using std::sqrt;
+  const V3<T> e = b - a;
+  const T L = sqrt(dot(e, e));
+  const V3<T> u = (T(1) / L) * e;
+  g[0] = T(-1) * u;
+  g[1] = u;
+  return L;
+}
+
+// Triple a-b-c: signed turning angle at b about the frozen axis n (unit):
+// theta = atan2((e1 x e2).n, e1.e2). Only bending out of the cloth's plane
+// (about n) counts; the axis is set from the step's history (DESIGN §1).
+template <class T>
+inline T bend_angle(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3]) {
+  using std::atan2;
+  const V3<T> e1 = b - a, e2 = c - b;
+  const T s = dot(cross(e1, e2), n);
+  const T co = dot(e1, e2);
+  const T inv = T(1) / (s * s + co * co);
+  const V3<T> ge1 = inv * (co * cross(e2, n) - s * e2);
+  const V3<T> ge2 = inv * (co * cross(n, e1) - s * e1);
+  g[0] = T(-1) * ge1;
+  g[1] = ge1 - ge2;
+  g[2] = ge2;
+  return atan2(s, co);
+}
+
+// Corner c with warp neighbour a and weft neighbour b: shear angle
+// phi = pi/2 - angle(a-c, b-c) = atan2(u.v, |u x v|). Particle order [c, a, b].
+template <class T>
+inline T shear_angle(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3]) {
+  using std::atan2;
+  using std::sqrt;
+  const V3<T> u = a - c, v = b - c;
+  const V3<T> w = cross(u, v);
+  const T s = sqrt(dot(w, w));
+  const T co = dot(u, v);
+  const T inv = T(1) / (s * s + co * co);
+  const T is = T(1) / s;
+  const V3<T> gu = inv * (s * v - (co * is) * cross(v, w));
+  const V3<T> gv = inv * (s * u - (co * is) * cross(w, u));
+  g[0] = T(-1) * (gu + gv);
+  g[1] = gu;
+  g[2] = gv;
+  return atan2(co, s);
+}
+
+}  // namespace drape

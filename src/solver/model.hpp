@@ -1,0 +1,39 @@
+#pragma once
+// Everything the cost needs besides the cloth's arrays: KES bands per
+// direction, gravity, contact, the time step, and the scales that make the
+// cost terms comparable (DESIGN §1, §6).
+#include "solver/band.hpp"
+#include "solver/cloth.hpp"
+#include "solver/contact.hpp"
+#include "solver/fabric.hpp"
+#include "solver/scene.hpp"
+
+namespace drape {
+
+struct Model {
+  Band stretch[2];  // tension (N/m) against strain, warp and weft
+  Band bend[2];     // moment (N*m/m) against curvature (1/m)
+  Band shear;       // shear force (N/m) against shear angle (rad)
+  bool shear_on = true;
+  double gravity[3] = {0, 0, -9.80665};
+  Contact contact;
+  double dt = 1e-3, dt_prev = 1e-3;  // this step and the previous one, s
+  double force_scale = 1;            // F0: residual forces are measured in F0 (a particle's weight)
+  // Term switches (tests check each term's gradient alone).
+  bool use_newton = true, use_stretch = true, use_bend = true, use_shear = true;
+
+  // d(acceleration)/dx for the three-point formula with unequal steps.
+  double accel_coeff() const { return 2.0 / ((dt + dt_prev) * dt); }
+};
+
+struct Cloth;
+struct Scene;
+
+// Builds the model of a scene and fabric for a grid of spacing h.
+Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj);
+
+// A flat cloth at rest at the scene's height, on the finest mesh, every
+// particle active, nothing clamped. Allocates every array once.
+Cloth make_cloth(const Scene& scene, const Fabric& fabric);
+
+}  // namespace drape

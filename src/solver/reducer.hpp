@@ -1,0 +1,40 @@
+#pragma once
+// Global sums in a fixed order (DESIGN §3): each rank hands in one partial per
+// owned tile; the result is the sum over all tiles in tile order, bitwise the
+// same for any number of ranks and threads. The MPI version lives in
+// src/decomp/; physics only sees this interface.
+#include <cstdint>
+#include <vector>
+
+namespace drape {
+
+class Reducer {
+ public:
+  virtual ~Reducer() = default;
+  // partials: k rows, each with one value per owned tile (ascending tile id).
+  // out[r] = sum over all tiles (all ranks) of row r, in tile order.
+  virtual void sum_tiles(const std::vector<int>& owned_tiles, const double* partials, int k,
+                         double* out) const = 0;
+  virtual double max(double v) const = 0;
+  virtual uint64_t sum_u64(uint64_t v) const = 0;  // wrapping sum (checksums)
+  virtual int64_t sum_i64(int64_t v) const = 0;
+};
+
+// One rank: the owned tiles are all tiles.
+class LocalReducer : public Reducer {
+ public:
+  void sum_tiles(const std::vector<int>& owned, const double* partials, int k,
+                 double* out) const override {
+    const size_t n = owned.size();
+    for (int r = 0; r < k; ++r) {
+      double s = 0;
+      for (size_t t = 0; t < n; ++t) s += partials[r * n + t];
+      out[r] = s;
+    }
+  }
+  double max(double v) const override { return v; }
+  uint64_t sum_u64(uint64_t v) const override { return v; }
+  int64_t sum_i64(int64_t v) const override { return v; }
+};
+
+}  // namespace drape

@@ -1,0 +1,33 @@
+// Names of the scene's enumerations, spelled as in the scene TOML.
+#include "solver/scene.hpp"
+
+namespace drape {
+
+const char* to_string(ObstacleShape s) {
+  switch (s) {
+    case ObstacleShape::Box: return "box";
+    case ObstacleShape::Sphere: return "sphere";
+    case ObstacleShape::None: return "none";
+  }
+  return "?";
+}
+
+const char* to_string(GradientMode g) {
+  switch (g) {
+    case GradientMode::Analytic: return "analytic";
+    case GradientMode::Numeric: return "numeric";
+  }
+  return "?";
+}
+
+const char* to_string(Schedule s) {
+  switch (s) {
+    case Schedule::ActiveLists: return "active-lists";
+    case Schedule::Static: return "static";
+    case Schedule::Dynamic: return "dynamic";
+    case Schedule::Guided: return "guided";
+  }
+  return "?";
+}
+
+}  // namespace drape

@@ -1,0 +1,68 @@
+#pragma once
+// The scene a run simulates: plain data, SI units, already validated.
+// src/io/config.cpp fills it from TOML; the solver only reads it.
+#include <array>
+#include <string>
+
+namespace drape {
+
+enum class ObstacleShape { Box, Sphere, None };
+enum class GradientMode { Analytic, Numeric };
+enum class Schedule { ActiveLists, Static, Dynamic, Guided };
+
+struct ClothSpec {
+  std::array<int, 2> particles{1000, 1000};  // NI (warp, i) x NJ (weft, j)
+  std::array<double, 2> size{1.0, 1.0};      // m along i and j
+  std::string fabric = "denim-A";            // name in data/kes/ or a path
+  int tile = 50;                             // particles per tile side
+  bool shear = true;                         // KES shear band on/off
+  double height = 0.45;                      // m, z of the flat cloth at t = 0
+  std::array<double, 2> center{0.0, 0.0};    // m, x-y of the cloth centre
+};
+
+struct ObstacleSpec {
+  ObstacleShape shape = ObstacleShape::Box;
+  std::array<double, 3> center{0.0, 0.0, 0.2};  // m
+  std::array<double, 3> size{0.4, 0.4, 0.4};    // m, box edge lengths
+  double radius = 0.2;                          // m, sphere
+  bool floor = true;                            // plane z = 0
+};
+
+struct SolverSpec {
+  double dt = 1e-3;             // s, first step (adaptive afterwards)
+  double dt_min = 1e-5;         // s
+  double dt_max = 4e-3;         // s
+  int steps = 200;              // time steps at most
+  int max_iterations = 200;     // CG iterations per step at most
+  double tolerance = 1e-6;      // converged when cost per active particle < this
+  GradientMode gradient = GradientMode::Analytic;
+  double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
+  double rest_speed = 0.0;      // m/s; > 0 ends the run once max speed is below it
+  double contact_thickness = 0.0;  // m; 0 = automatic (half a grid spacing)
+};
+
+struct OutputSpec {
+  int every = 10;               // write a frame every N steps (0: final only)
+  bool picture = true;          // drape.png of the final state
+};
+
+struct ParallelSpec {
+  Schedule schedule = Schedule::ActiveLists;
+  int chunk = 4;                // tiles per chunk for the dynamic schedule
+  int threads = 0;              // 0: OMP_NUM_THREADS / OpenMP default
+};
+
+struct Scene {
+  std::string name = "box-drape";
+  ClothSpec cloth;
+  ObstacleSpec obstacle;
+  SolverSpec solver;
+  OutputSpec output;
+  ParallelSpec parallel;
+};
+
+const char* to_string(ObstacleShape s);
+const char* to_string(GradientMode g);
+const char* to_string(Schedule s);
+
+}  // namespace drape

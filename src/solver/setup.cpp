@@ -1,0 +1,97 @@
+// Building the cloth and the model of a scene: the finest mesh, every
+// particle active, flat at the scene's height, released from rest.
+#include <algorithm>
+#include <cmath>
+
+#include "amrc/active_lists.hpp"
+#include "solver/model.hpp"
+
+namespace drape {
+
+double Cloth::total_mass() const {
+  double m = 0;
+  for (double v : mass) m += v;
+  return m;
+}
+
+Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj) {
+  Model m;
+  for (int d = 0; d < 2; ++d) {
+    m.stretch[d] = Band::tensile(fabric.tensile[d]);
+    const BendingKES& b = fabric.bending[d];
+    m.bend[d] = Band::linear(b.b, b.hb, b.load, b.unload);
+  }
+  const ShearKES& s = fabric.shear;
+  m.shear = Band::linear(s.g, s.hg, s.load, s.unload);
+  m.shear_on = scene.cloth.shear;
+  m.use_shear = scene.cloth.shear;
+  // Residual forces are measured in the weight of one finest-mesh particle.
+  const double g = std::fabs(m.gravity[2]);
+  const double weight = fabric.density * hi * hj * g;
+  m.force_scale = weight;
+  Obstacle& o = m.contact.obstacle;
+  const ObstacleSpec& os = scene.obstacle;
+  o.shape = os.shape;
+  for (int k = 0; k < 3; ++k) {
+    o.center[k] = os.center[k];
+    o.half[k] = 0.5 * os.size[k];
+  }
+  o.radius = os.radius;
+  o.floor = os.floor;
+  o.floor_z = 0.0;
+  // Contact acts within delta of a surface (half a grid spacing, or half the
+  // thickness if larger); a push of delta balances 10^4 particle weights, so
+  // particles settle well within delta and never reach the surface itself.
+  const double delta = scene.solver.contact_thickness > 0
+                           ? scene.solver.contact_thickness
+                           : std::max(0.5 * std::min(hi, hj), 0.5 * fabric.thickness);
+  m.contact.thickness = delta;
+  m.contact.stiffness = 1e4 * weight / delta;
+  m.dt = m.dt_prev = scene.solver.dt;
+  return m;
+}
+
+Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
+  Cloth c;
+  Grid& g = c.grid;
+  g.ni = scene.cloth.particles[0];
+  g.nj = scene.cloth.particles[1];
+  g.hi = scene.cloth.size[0] / (g.ni - 1);
+  g.hj = scene.cloth.size[1] / (g.nj - 1);
+  const int64_t n = g.n();
+  c.layout.n = n;
+  c.z.assign(c.layout.size(), 0.0);
+  c.x1.assign(3 * n, 0.0);
+  c.x2.assign(3 * n, 0.0);
+  c.mass.assign(n, 0.0);
+  c.flags.assign(n, kActive);
+  c.level.assign(n, 0);
+  c.edge_on.assign(2 * n, 0);
+  c.triple_on.assign(2 * n, 0);
+  c.shear_on.assign(n, 0);
+  c.bend_axis.assign(6 * n, 0.0);
+  for (auto* v : {&c.edge_rest, &c.edge_width, &c.triple_rest, &c.triple_width})
+    v->assign(2 * n, 0.0);
+  c.shear_area.assign(n, 0.0);
+  c.shear_rest.assign(n, 0.0);
+  const double dt = scene.solver.dt, gz = -9.80665;
+  double* x = c.x();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < g.ni; ++i)
+    for (int j = 0; j < g.nj; ++j) {
+      const int64_t p = g.id(i, j);
+      x[3 * p + 0] = scene.cloth.center[0] + i * g.hi - 0.5 * scene.cloth.size[0];
+      x[3 * p + 1] = scene.cloth.center[1] + j * g.hj - 0.5 * scene.cloth.size[1];
+      x[3 * p + 2] = scene.cloth.height;
+      for (int k = 0; k < 3; ++k) c.x1[3 * p + k] = c.x2[3 * p + k] = x[3 * p + k];
+      // Released from rest under gravity: x(-dt) = x(0) + g dt^2 / 2 makes the
+      // three-point acceleration exact for a free fall.
+      c.x2[3 * p + 2] += 0.5 * gz * dt * dt;
+    }
+  c.dt = c.dt_prev = dt;
+  rebuild_topology(c, scene.cloth.shear);
+  rebuild_geometry(c, fabric.density);
+  return c;
+}
+
+}  // namespace drape

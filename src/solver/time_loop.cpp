@@ -1,0 +1,155 @@
+#include "solver/time_loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "io/error.hpp"
+#include "solver/kernels.hpp"
+
+namespace drape {
+
+TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const Tiling& tiling,
+                   const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec)
+    : c_(cloth), m_(model), lists_(lists), red_(red), spec_(spec),
+      ev_(cloth, model, lists, tiling, policy, red), cg_(cloth, lists, tiling, red) {
+  z_saved_.assign(cloth.z.size(), 0.0);
+  free_ = red.sum_i64(lists.particles.size());
+}
+
+void TimeLoop::freeze_bend_axes() {
+  const Grid& g = c_.grid;
+  const double* x1 = c_.x1.data();
+  auto tangent = [&](int64_t p, int d) {
+    const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
+    const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
+    V3<double> t = load3<double>(x1 + 3 * b) - load3<double>(x1 + 3 * a);
+    const double len = std::sqrt(dot(t, t));
+    return len > 0 ? (1.0 / len) * t : V3<double>{0, 0, 0};
+  };
+  const int64_t n = g.n();
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p < n; ++p) {
+    // A warp triple bends about the weft tangent, a weft triple about minus
+    // the warp tangent: both then count bending towards -normal as positive.
+    if (c_.triple_on[2 * p]) store3(tangent(p, 1), &c_.bend_axis[6 * p]);
+    if (c_.triple_on[2 * p + 1]) store3(-1.0 * tangent(p, 0), &c_.bend_axis[6 * p + 3]);
+  }
+}
+
+void TimeLoop::predict() {
+  const double ratio = c_.dt / c_.dt_prev;
+  double* x = c_.x();
+  const ActiveList& L = lists_.particles;
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < L.size(); ++k) {
+    const int64_t p = L.items[k];
+    for (int i = 0; i < 3; ++i) {
+      const int64_t u = 3 * p + i;
+      x[u] = c_.x1[u] + ratio * (c_.x1[u] - c_.x2[u]);
+    }
+  }
+}
+
+void TimeLoop::check_finite(const StepStats& st) const {
+  if (std::isfinite(st.cost.total())) return;
+  const Grid& g = c_.grid;
+  const std::vector<double>& rho = ev_.residual();
+  for (int64_t p : lists_.particles.items)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(c_.z[3 * p + k]) || !std::isfinite(rho[3 * p + k])) {
+        std::ostringstream os;
+        os << "numerical failure at step " << st.step << ", iteration " << st.iterations
+           << ": non-finite position or force residual at particle (" << g.i_of(p) << ", "
+           << g.j_of(p) << ")";
+        throw NumericalError(os.str());
+      }
+  std::ostringstream os;
+  os << "numerical failure at step " << st.step << ", iteration " << st.iterations
+     << ": the cost is not finite (an element force overflowed)";
+  throw NumericalError(os.str());
+}
+
+void TimeLoop::accept(StepStats& st) {
+  const double damp = spec_.damping;
+  double* x = c_.x();
+  const ActiveList& L = lists_.particles;
+  double vmax = 0;
+  int64_t pushed = 0;
+  const Obstacle& ob = m_.contact.obstacle;
+#pragma omp parallel for schedule(static) reduction(max : vmax) reduction(+ : pushed)
+  for (int64_t k = 0; k < L.size(); ++k) {
+    const int64_t p = L.items[k];
+    double* xp = x + 3 * p;
+    // Safety net: a particle that ended inside an obstacle is put back on its surface.
+    const double depth = penetration(ob, xp);
+    if (depth > 0) {
+      double n[3];
+      if (ob.floor && xp[2] < ob.floor_z) xp[2] = ob.floor_z;
+      if (ob.shape == ObstacleShape::Box && box_distance(ob, xp, n, nullptr) < 0) {
+        const double d = box_distance(ob, xp, n, nullptr);
+        for (int i = 0; i < 3; ++i) xp[i] -= d * n[i];
+      }
+      if (ob.shape == ObstacleShape::Sphere && sphere_distance(ob, xp, n, nullptr) < 0) {
+        const double d = sphere_distance(ob, xp, n, nullptr);
+        for (int i = 0; i < 3; ++i) xp[i] -= d * n[i];
+      }
+      ++pushed;
+    }
+    double v2 = 0;
+    for (int i = 0; i < 3; ++i) {
+      const int64_t u = 3 * p + i;
+      const double dx = x[u] - c_.x1[u];
+      v2 += dx * dx;
+      c_.x2[u] = x[u] - (1.0 - damp) * dx;  // damping shortens the remembered velocity
+      c_.x1[u] = x[u];
+    }
+    vmax = std::max(vmax, std::sqrt(v2) / c_.dt);
+  }
+  st.max_speed = red_.max(vmax);
+  st.projections = red_.sum_i64(pushed);
+}
+
+StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>& on_iteration) {
+  StepStats st;
+  st.step = c_.step + 1;
+  std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
+  freeze_bend_axes();
+  CgSettings cs;
+  cs.max_iterations = spec_.max_iterations;
+  cs.tolerance = spec_.tolerance;
+  cs.numeric = spec_.gradient == GradientMode::Numeric;
+  cs.free_particles = free_;
+  CgResult r;
+  for (;;) {
+    m_.dt = c_.dt;
+    m_.dt_prev = c_.dt_prev;
+    predict();
+    r = cg_.minimize(ev_, c_.z.data(), cs, timers, on_iteration);
+    st.iterations += r.iterations;
+    st.evaluations += r.evaluations;
+    st.cost = r.cost;
+    check_finite(st);
+    if (r.converged || c_.dt <= spec_.dt_min * (1 + 1e-12) || st.retries >= 8) break;
+    // Not converged: the step was too long for the stiff cost. Retry shorter.
+    std::copy(z_saved_.begin(), z_saved_.end(), c_.z.begin());
+    c_.dt = std::max(spec_.dt_min, 0.5 * c_.dt);
+    ++st.retries;
+  }
+  st.converged = r.converged;
+  st.cost_per_particle = r.cost_per_particle;
+  st.dt = c_.dt;
+  accept(st);
+  c_.time += c_.dt;
+  c_.step = st.step;
+  st.time = c_.time;
+  c_.dt_prev = c_.dt;
+  // Keep the iterations per step within [max/8, max/2] by adapting dt.
+  const int it = r.iterations;
+  if (it > spec_.max_iterations / 2) c_.dt *= 0.7;
+  else if (it < std::max(2, spec_.max_iterations / 8)) c_.dt *= 1.25;
+  c_.dt = std::clamp(c_.dt, spec_.dt_min, spec_.dt_max);
+  return st;
+}
+
+}  // namespace drape

@@ -1,0 +1,56 @@
+#pragma once
+// The paper's Algorithm 1: for each time step, minimise the total cost by CG
+// starting from the step's history, then accept. Adds what a stiff cost needs
+// (DESIGN §6): a step that does not converge is retried with half the time
+// step, and the time step adapts to keep the iterations per step bounded.
+#include <functional>
+
+#include "solver/cg.hpp"
+#include "solver/cost.hpp"
+#include "solver/scene.hpp"
+
+namespace drape {
+
+struct StepStats {
+  int step = 0;
+  double time = 0, dt = 0;
+  int iterations = 0, evaluations = 0, retries = 0;
+  bool converged = false;
+  CostTerms cost;
+  double cost_per_particle = 0;
+  double max_speed = 0;   // m/s over free particles
+  int64_t projections = 0;  // particles pushed back out of an obstacle
+};
+
+class TimeLoop {
+ public:
+  TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const Tiling& tiling,
+           const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec);
+
+  // Advances one step. Throws NumericalError on NaN/Inf or divergence.
+  StepStats step(Timers& timers, const std::function<void(int, double)>& on_iteration = {});
+
+  Evaluator& evaluator() { return ev_; }
+  Minimizer& minimizer() { return cg_; }
+  int64_t free_particles() const { return free_; }
+
+  // The bending axis of every triple from the step-start positions x1.
+  void freeze_bend_axes();
+
+ private:
+  void predict();
+  void accept(StepStats& st);
+  void check_finite(const StepStats& st) const;
+
+  Cloth& c_;
+  Model& m_;
+  const ActiveLists& lists_;
+  const Reducer& red_;
+  SolverSpec spec_;
+  Evaluator ev_;
+  Minimizer cg_;
+  std::vector<double> z_saved_;
+  int64_t free_ = 0;
+};
+
+}  // namespace drape

@@ -1,0 +1,255 @@
+// The real `drape` program on bad input: for each case, exit status 2, one
+// line "drape: error: ..." on stderr naming the key, flag or file, and the
+// output directory not created. Also --dry-run, --version and --help.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tmp_dir() {
+  const fs::path d = fs::path(DRAPE_TEST_TMP) / ("test_cli-" + std::to_string(getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void spit(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+// Single-quoted for /bin/sh.
+std::string sh(const std::string& arg) {
+  std::string q = "'";
+  for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// The test program itself runs under MPI: its launcher's variables must not
+// reach the child, or the child would think mpirun started it. Root may run it.
+std::string clean_env() {
+  static const char* const prefixes[] = {"OMPI_", "PMIX_", "ORTE_", "OPAL_", "PMI_", "HYDRA_", "MPI_"};
+  std::string cmd = "env";
+  for (char** e = environ; *e; ++e) {
+    const std::string var(*e);
+    const std::string name = var.substr(0, var.find('='));
+    for (const char* p : prefixes)
+      if (name.rfind(p, 0) == 0) cmd += " -u " + name;
+  }
+  return cmd + " OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1";
+}
+
+struct Result {
+  int status = -1;
+  std::string out, err;
+};
+
+Result run_drape(const std::vector<std::string>& args, const std::string& tag) {
+  const fs::path out = tmp_dir() / (tag + ".stdout"), err = tmp_dir() / (tag + ".stderr");
+  std::string cmd = clean_env() + " " + sh(DRAPE_BINARY);
+  for (const auto& a : args) cmd += " " + sh(a);
+  cmd += " </dev/null >" + sh(out.string()) + " 2>" + sh(err.string());
+  const int rc = std::system(cmd.c_str());
+  Result r;
+  r.status = rc != -1 && WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+// A fabric file made from the shipped denim-A with one quantity replaced;
+// returns the path and, in `line`, the line of the replaced quantity.
+std::string fabric_with(const std::string& tag, const std::string& key, const std::string& replacement,
+                        int& line) {
+  std::string text = slurp(fs::path(DRAPE_SOURCE_DIR) / "data" / "kes" / "denim-A.toml");
+  const std::regex re("(^|\n)" + key + "[ \t]*=[ \t]*\\{[^}\n]*\\}");
+  std::smatch m;
+  if (!std::regex_search(text, m, re)) {
+    ADD_FAILURE() << "data/kes/denim-A.toml has no line '" << key << " = { ... }'";
+    return "";
+  }
+  const auto pos = static_cast<size_t>(m.position(0)) + m[1].length();
+  line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + pos, '\n'));
+  text.replace(pos, static_cast<size_t>(m.length(0) - m[1].length()), replacement);
+  const fs::path p = tmp_dir() / (tag + "-fabric.toml");
+  spit(p, text);
+  return p.string();
+}
+
+// One bad invocation. In args and says, "{dir}" stands for the case's
+// directory; `file`, when set, is written there as scene.toml first.
+struct BadRun {
+  const char* label;
+  std::vector<std::string> args;
+  std::vector<std::string> says;
+  const char* file = nullptr;
+};
+
+std::string expand(std::string s, const std::string& dir) {
+  for (size_t p; (p = s.find("{dir}")) != std::string::npos;) s.replace(p, 5, dir);
+  return s;
+}
+
+// The checks every bad case shares.
+void expect_refused(const std::string& label, std::vector<std::string> args, const std::vector<std::string>& says) {
+  const fs::path outdir = tmp_dir() / (label + "-out");
+  // --output first, so that a flag missing its value at the end stays last.
+  args.insert(args.begin(), {"--output", outdir.string()});
+  const Result r = run_drape(args, label);
+  EXPECT_EQ(r.status, 2) << "stderr: " << r.err;
+  EXPECT_EQ(r.err.rfind("drape: error: ", 0), 0u) << "stderr: " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "not one line: " << r.err;
+  for (const auto& s : says) EXPECT_NE(r.err.find(s), std::string::npos) << "'" << s << "' not in: " << r.err;
+  EXPECT_FALSE(fs::exists(outdir)) << "output directory was created";
+}
+
+// Removes this process's temporary files when every test passed (they are
+// kept after a failure, to look at).
+struct CleanUp : ::testing::Environment {
+  void TearDown() override {
+    if (::testing::UnitTest::GetInstance()->failed_test_count() == 0) {
+      std::error_code ec;
+      fs::remove_all(fs::path(DRAPE_TEST_TMP) / ("test_cli-" + std::to_string(getpid())), ec);
+    }
+  }
+};
+const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+
+class BadInvocation : public ::testing::TestWithParam<BadRun> {};
+
+TEST_P(BadInvocation, ExitTwoOneLineNothingWritten) {
+  const BadRun& c = GetParam();
+  const fs::path dir = tmp_dir() / c.label;
+  fs::create_directories(dir);
+  if (c.file) spit(dir / "scene.toml", c.file);
+  std::vector<std::string> args, says;
+  for (const auto& a : c.args) args.push_back(expand(a, dir.string()));
+  for (const auto& s : c.says) says.push_back(expand(s, dir.string()));
+  expect_refused(c.label, args, says);
+}
+
+const BadRun kBadRuns[] = {
+    // scene config
+    {"config_unknown_key", {"--config", "{dir}/scene.toml"}, {"{dir}/scene.toml:3:", "cloth.partcles", "cloth.particles?"},
+     "# a scene\n[cloth]\npartcles = [9, 9]\n"},
+    {"config_unknown_section", {"--config", "{dir}/scene.toml"}, {"{dir}/scene.toml:1:", "[clth]"}, "[clth]\ntile = 4\n"},
+    {"config_wrong_type", {"--config", "{dir}/scene.toml"},
+     {"{dir}/scene.toml:2:", "cloth.particles: expected an array of 2 integers, got a string"},
+     "[cloth]\nparticles = \"big\"\n"},
+    {"config_float_for_int", {"--config", "{dir}/scene.toml"}, {"{dir}/scene.toml:2:", "solver.steps"},
+     "[solver]\nsteps = 10.5\n"},
+    {"config_out_of_range", {"--config", "{dir}/scene.toml"}, {"{dir}/scene.toml:3:", "solver.dt", "> 0"},
+     "[solver]\n\ndt = -0.001\n"},
+    {"config_bad_enum", {"--config", "{dir}/scene.toml"}, {"{dir}/scene.toml:2:", "obstacle.shape", "cube"},
+     "[obstacle]\nshape = \"cube\"\n"},
+    {"config_syntax_error", {"--config", "{dir}/scene.toml"}, {"{dir}/scene.toml:2:", "TOML syntax error"},
+     "[cloth]\ntile = = 4\n"},
+    {"config_missing_file", {"--config", "{dir}/no-such-scene.toml"}, {"{dir}/no-such-scene.toml"}},
+    // flags
+    {"flag_unknown", {"--bogus"}, {"--bogus"}},
+    {"flag_threads_zero", {"--threads", "0"}, {"--threads"}},
+    {"flag_threads_word", {"--threads", "many"}, {"--threads"}},
+    {"flag_config_no_value", {"--config"}, {"--config"}},
+    {"flag_set_no_equals", {"--set", "cloth.particles"}, {"--set cloth.particles", "section.key=value"}},
+    {"flag_set_unknown_key", {"--set", "cloth.partciles=[9,9]"}, {"cloth.partciles", "cloth.particles?"}},
+    {"flag_set_wrong_type", {"--set", "cloth.particles=9"}, {"--set cloth.particles=9", "cloth.particles"}},
+    {"flag_set_out_of_range", {"--set", "solver.steps=0"}, {"--set solver.steps=0", "solver.steps"}},
+    {"flag_set_not_toml", {"--set", "solver.dt=fast"}, {"--set solver.dt=fast", "solver.dt: expected a number"}},
+    // fabric
+    {"fabric_unknown_name", {"--set", "cloth.fabric=no-such-fabric"}, {"no-such-fabric"}},
+    {"fabric_missing_path", {"--set", "cloth.fabric={dir}/missing-fabric.toml"}, {"{dir}/missing-fabric.toml"}},
+    {"fabric_missing_via_config", {"--config", "{dir}/scene.toml"}, {"no-such-fabric-either"},
+     "[cloth]\nfabric = \"no-such-fabric-either\"\n"},
+};
+
+INSTANTIATE_TEST_SUITE_P(Cli, BadInvocation, ::testing::ValuesIn(kBadRuns),
+                         [](const auto& info) { return std::string(info.param.label); });
+
+// Fabric files with one bad value: refused naming the file, line and key.
+TEST(CliFabric, LinearityAboveOne) {
+  int line = 0;
+  const std::string path = fabric_with("lt", "LT", "LT = { value = 1.5, unit = \"1\" }", line);
+  ASSERT_FALSE(path.empty());
+  expect_refused("fabric_lt", {"--set", "cloth.fabric=" + path},
+                 {path + ":" + std::to_string(line), "LT", "1.5"});
+}
+
+TEST(CliFabric, MissingUnit) {
+  int line = 0;
+  const std::string path = fabric_with("unit", "EMT", "EMT = { value = 5.515 }", line);
+  ASSERT_FALSE(path.empty());
+  expect_refused("fabric_unit", {"--set", "cloth.fabric=" + path},
+                 {path + ":" + std::to_string(line), "EMT", "unit"});
+}
+
+TEST(CliFabric, NegativeRigidity) {
+  int line = 0;
+  const std::string path = fabric_with("b", "B", "B = { value = -0.172, unit = \"gf*cm^2/cm\" }", line);
+  ASSERT_FALSE(path.empty());
+  expect_refused("fabric_b", {"--set", "cloth.fabric=" + path}, {path + ":" + std::to_string(line), "B"});
+}
+
+// ------------------------------------------------------------ good input --
+
+TEST(Cli, DryRunPrintsResolvedScene) {
+  const fs::path outdir = tmp_dir() / "dry-out";
+  const Result r = run_drape({"--dry-run", "--set", "cloth.particles=[9,9]", "--output", outdir.string()}, "dry");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("particles = [9, 9]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[solver]"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(outdir)) << "--dry-run wrote output";
+}
+
+// What --dry-run prints is a scene file that resolves to itself.
+TEST(Cli, DryRunOutputReadsBack) {
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const Result first = run_drape({"--dry-run", "--config", small.string(), "--set", "solver.steps=7"}, "dry1");
+  ASSERT_EQ(first.status, 0) << first.err;
+  const fs::path resolved = tmp_dir() / "resolved.toml";
+  spit(resolved, first.out);
+  const Result second = run_drape({"--dry-run", "--config", resolved.string()}, "dry2");
+  ASSERT_EQ(second.status, 0) << second.err;
+  EXPECT_EQ(second.out, first.out);
+  EXPECT_NE(first.out.find("steps = 7"), std::string::npos) << first.out;
+}
+
+TEST(Cli, ExampleScenesDryRun) {
+  for (const auto& e : fs::directory_iterator(fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes")) {
+    if (e.path().extension() != ".toml") continue;
+    SCOPED_TRACE(e.path().string());
+    const Result r = run_drape({"--dry-run", "--config", e.path().string()}, "scene-" + e.path().stem().string());
+    EXPECT_EQ(r.status, 0) << r.err;
+  }
+}
+
+TEST(Cli, Version) {
+  const Result r = run_drape({"--version"}, "version");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find(std::string("drape ") + DRAPE_VERSION), std::string::npos) << r.out;
+}
+
+TEST(Cli, Help) {
+  const Result r = run_drape({"--help"}, "help");
+  EXPECT_EQ(r.status, 0) << r.err;
+  for (const char* flag : {"--config", "--set", "--output", "--threads", "--dry-run", "--version"})
+    EXPECT_NE(r.out.find(flag), std::string::npos) << flag << " not in: " << r.out;
+}
+
+}  // namespace
