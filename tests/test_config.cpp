@@ -237,18 +237,6 @@ struct BadFile {
   std::vector<const char*> says;
 };
 
-class BadSceneFile : public ::testing::TestWithParam<BadFile> {};
-
-TEST_P(BadSceneFile, RefusedNamingKeyAndLine) {
-  const BadFile& c = GetParam();
-  const std::string path = write_scene(c.text);
-  const std::string msg = error_of(path);
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-  EXPECT_EQ(msg.rfind(path + ":" + std::to_string(c.line) + ":", 0), 0u)
-      << "expected to start with " << path << ":" << c.line << ":, got: " << msg;
-  for (const char* s : c.says) EXPECT_NE(msg.find(s), std::string::npos) << "'" << s << "' not in: " << msg;
-}
-
 const BadFile kBadFiles[] = {
     {"unknown_key", "# t\n[cloth]\npartcles = [9, 9]\n", 3,
      {"unknown key cloth.partcles", "did you mean cloth.particles?"}},
@@ -300,8 +288,18 @@ const BadFile kBadFiles[] = {
     {"syntax_bare_string", "[obstacle]\nshape = box\n", 2, {"TOML syntax error"}},
 };
 
-INSTANTIATE_TEST_SUITE_P(Config, BadSceneFile, ::testing::ValuesIn(kBadFiles),
-                         [](const auto& info) { return std::string(info.param.label); });
+// All cases in one process: each test process pays for MPI start-up.
+TEST(ConfigBad, SceneFilesRefusedNamingKeyAndLine) {
+  for (const BadFile& c : kBadFiles) {
+    SCOPED_TRACE(c.label);
+    const std::string path = write_scene(c.text, std::string(".") + c.label);
+    const std::string msg = error_of(path);
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_EQ(msg.rfind(path + ":" + std::to_string(c.line) + ":", 0), 0u)
+        << "expected to start with " << path << ":" << c.line << ":, got: " << msg;
+    for (const char* s : c.says) EXPECT_NE(msg.find(s), std::string::npos) << "'" << s << "' not in: " << msg;
+  }
+}
 
 TEST(ConfigBad, SyntaxErrorHasColumn) {
   const std::string path = write_scene("[cloth]\ntile = = 4\n");
@@ -331,16 +329,6 @@ struct BadSet {
   std::vector<const char*> says;
 };
 
-class BadOverride : public ::testing::TestWithParam<BadSet> {};
-
-TEST_P(BadOverride, RefusedNamingTheOverride) {
-  const BadSet& c = GetParam();
-  const std::string msg = error_of(std::nullopt, {"solver.steps=3", c.set});
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-  EXPECT_EQ(msg.rfind(std::string("--set ") + c.set + ": ", 0), 0u) << msg;
-  for (const char* s : c.says) EXPECT_NE(msg.find(s), std::string::npos) << "'" << s << "' not in: " << msg;
-}
-
 const BadSet kBadSets[] = {
     {"no_equals", "cloth.particles", {"expected section.key=value"}},
     {"no_key", "=5", {"missing key"}},
@@ -359,8 +347,15 @@ const BadSet kBadSets[] = {
     {"dt_max_below_dt", "solver.dt_max=1e-4", {"solver.dt", "[1e-05, 0.0001]"}},
 };
 
-INSTANTIATE_TEST_SUITE_P(Config, BadOverride, ::testing::ValuesIn(kBadSets),
-                         [](const auto& info) { return std::string(info.param.label); });
+TEST(ConfigBad, OverridesRefusedNamingTheOverride) {
+  for (const BadSet& c : kBadSets) {
+    SCOPED_TRACE(c.label);
+    const std::string msg = error_of(std::nullopt, {"solver.steps=3", c.set});
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_EQ(msg.rfind(std::string("--set ") + c.set + ": ", 0), 0u) << msg;
+    for (const char* s : c.says) EXPECT_NE(msg.find(s), std::string::npos) << "'" << s << "' not in: " << msg;
+  }
+}
 
 // An override fixes nothing the file got wrong: the unknown key still counts.
 TEST(ConfigBad, OverrideDoesNotHideFileErrors) {

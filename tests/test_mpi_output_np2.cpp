@@ -220,6 +220,27 @@ TEST(ParallelOutput, ScatteredTilesClippedAtTheBorder) {
   check_matches_one_rank("tiles", blocks);
 }
 
+TEST(ParallelOutput, BadFrameOnOneRankFailsOnBoth) {
+  // Rank 1 names a block outside the grid: both ranks must throw rather
+  // than rank 0 waiting in a collective call.
+  const std::string dir = shared_dir("bad_block");
+  {
+    Scene scene;
+    Fabric fabric;
+    Hdf5Output out(dir, MPI_COMM_WORLD, scene, "", fabric, NI, NJ);
+    const int rank = rank_of(MPI_COMM_WORLD);
+    Frame frame(1, {{0, 5, 0, NJ}});
+    FrameView view = frame.view();
+    if (rank == 1) view.owned = {{5, NI + 1, 0, NJ}};
+    EXPECT_THROW(out.write_frame(view), std::runtime_error);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank_of(MPI_COMM_WORLD) == 0) {
+    EXPECT_TRUE(fs::is_empty(dir));
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+}
+
 TEST(ParallelOutput, AbandonedRunLeavesNothing) {
   const std::string dir = shared_dir("abandon");
   {

@@ -16,13 +16,19 @@
 //       level              uint8   (NI x NJ)       AMRC level
 //     attributes: step (int64), time (float64, s)
 //
-// Each rank writes exactly the blocks it owns: memory and file dataspaces get
-// the same union of hyperslabs (the frame's arrays are in global particle
-// order), so the file's content does not depend on the number of ranks.
+// Each rank writes exactly the blocks it owns: the frame's arrays span the
+// whole grid in global particle order (valid on the owned blocks), and the
+// memory and file dataspaces get the same union of hyperslabs, so the file
+// does not depend on the number of ranks. The file is DIR/drape.h5.tmp until
+// finish() closes it and renames it.
+//
+// drape.xdmf (XDMF 3) is a temporal collection of uniform grids, one per
+// frame: Quadrilateral topology from /mesh/quads, XYZ geometry from the
+// frame's positions, node attributes shear, active, level (scalars) and
+// tension, moment (two-component arrays: component 0 warp, 1 weft).
+// Checked with ParaView 5.11's XDMF Reader and both Xdmf3 readers.
 #include <hdf5.h>
 
-#include <algorithm>
-#include <array>
 #include <charconv>
 #include <cstdio>
 #include <fstream>
@@ -320,14 +326,8 @@ class XdmfWriter {
       << "    <Geometry GeometryType=\"XYZ\">\n"
       << "     " << item(dims(3), "Float", 8, dir + "positions") << "\n"
       << "    </Geometry>\n";
-    if (f.tension) {
-      component(x, "tension_warp", dir + "tension", 0);
-      component(x, "tension_weft", dir + "tension", 1);
-    }
-    if (f.moment) {
-      component(x, "moment_warp", dir + "moment", 0);
-      component(x, "moment_weft", dir + "moment", 1);
-    }
+    if (f.tension) pair(x, "tension", item(dims(2), "Float", 8, dir + "tension"));
+    if (f.moment) pair(x, "moment", item(dims(2), "Float", 8, dir + "moment"));
     if (f.shear) scalar(x, "shear", item(dims(0), "Float", 8, dir + "shear"));
     scalar(x, "active", item(dims(0), "UChar", 1, dir + "active"));
     if (f.level) scalar(x, "level", item(dims(0), "UChar", 1, dir + "level"));
@@ -340,15 +340,12 @@ class XdmfWriter {
       << "    </Attribute>\n";
   }
 
-  // One component of an (NI x NJ x 2) dataset as a node scalar: a HyperSlab
-  // (start, stride, count) keeps the file free of duplicated arrays.
-  void component(std::ostringstream& x, const char* name, const std::string& path, int c) const {
-    x << "    <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
-      << "     <DataItem ItemType=\"HyperSlab\" Dimensions=\"" << dims(1) << "\" Type=\"HyperSlab\">\n"
-      << "      <DataItem Dimensions=\"3 3\" NumberType=\"Int\" Format=\"XML\">" << "0 0 " << c
-      << " 1 1 1 " << dims(1) << "</DataItem>\n"
-      << "      " << item(dims(2), "Float", 8, path) << "\n"
-      << "     </DataItem>\n"
+  // A (warp, weft) pair per node: a two-component array in ParaView. Both
+  // its XDMF readers (Xdmf2 and Xdmf3) read "Matrix" that way; "Vector"
+  // means three components to Xdmf2, and HyperSlab items are skipped by Xdmf3.
+  static void pair(std::ostringstream& x, const char* name, const std::string& data) {
+    x << "    <Attribute Name=\"" << name << "\" AttributeType=\"Matrix\" Center=\"Node\">\n"
+      << "     " << data << "\n"
       << "    </Attribute>\n";
   }
 };
@@ -451,19 +448,34 @@ void Hdf5Output::Impl::write_quads() {
                 dxpl.get());
 }
 
-void Hdf5Output::Impl::write(const FrameView& f) {
+namespace {
+
+// What is wrong with this rank's frame, or "".
+std::string frame_problem(const FrameView& f, int ni, int nj) {
   if (f.ni != ni || f.nj != nj)
-    throw std::runtime_error("HDF5 output: frame is " + std::to_string(f.ni) + "x" +
-                             std::to_string(f.nj) + ", file is " + std::to_string(ni) + "x" +
-                             std::to_string(nj));
-  if (!f.x || !f.flags) throw std::runtime_error("HDF5 output: frame without positions or flags");
-  // Optional arrays must be present on all ranks or on none: the dataset
-  // creation is collective.
-  const int mine = (f.tension ? 1 : 0) | (f.moment ? 2 : 0) | (f.shear ? 4 : 0) | (f.level ? 8 : 0);
-  int lo = 0, hi = 0;
-  MPI_Allreduce(&mine, &lo, 1, MPI_INT, MPI_BAND, comm);
-  MPI_Allreduce(&mine, &hi, 1, MPI_INT, MPI_BOR, comm);
-  if (lo != hi) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
+    return "frame is " + std::to_string(f.ni) + "x" + std::to_string(f.nj) + ", file is " +
+           std::to_string(ni) + "x" + std::to_string(nj);
+  if (!f.x || !f.flags) return "frame without positions or flags";
+  for (const Block& b : f.owned)
+    if (b.i0 < 0 || b.j0 < 0 || b.i1 > ni || b.j1 > nj) return "an owned block lies outside the grid";
+  return "";
+}
+
+}  // namespace
+
+void Hdf5Output::Impl::write(const FrameView& f) {
+  // Ranks agree on the frame before any collective HDF5 call, so that a bad
+  // frame on one rank cannot leave the others waiting. Optional arrays must
+  // be given on all ranks or on none (dataset creation is collective).
+  const std::string problem = frame_problem(f, ni, nj);
+  const int has = (f.tension ? 1 : 0) | (f.moment ? 2 : 0) | (f.shear ? 4 : 0) | (f.level ? 8 : 0);
+  const int local[3] = {has, ~has & 15, problem.empty() ? 0 : 1};
+  int all[3] = {0, 0, 0};
+  MPI_Allreduce(local, all, 3, MPI_INT, MPI_BOR, comm);
+  if (all[2])
+    throw std::runtime_error("HDF5 output: " +
+                             (problem.empty() ? std::string("another rank's frame is invalid") : problem));
+  if (all[0] & all[1]) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
 
   const std::string name = frame_name(f.step);
   Handle gcpl = untimed_gcpl();

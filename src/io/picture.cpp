@@ -12,9 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
-#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -150,14 +148,18 @@ Mesh cloth_mesh(const Surface& s, Box3& bounds) {
   const std::vector<int> is = sample(s.ni, 400), js = sample(s.nj, 400);
   const int mi = int(is.size()), mj = int(js.size());
   auto at = [&](int a, int b) { return size_t(is[a]) * s.nj + js[b]; };
-  double zlo = 1e300, zhi = -1e300;
+  Box3 own;
   for (int a = 0; a < mi; ++a)
     for (int b = 0; b < mj; ++b)
-      if (s.ok[at(a, b)]) {
-        zlo = std::min(zlo, s.x[at(a, b)].z);
-        zhi = std::max(zhi, s.x[at(a, b)].z);
-        bounds.add(s.x[at(a, b)]);
-      }
+      if (s.ok[at(a, b)]) own.add(s.x[at(a, b)]);
+  if (own.empty()) return {};
+  bounds.add(own.lo);
+  bounds.add(own.hi);
+  // A nearly flat cloth keeps a nearly uniform colour: the colour range is
+  // at least a quarter of the cloth's width, centred on its heights.
+  const double width = std::max(own.hi.x - own.lo.x, own.hi.y - own.lo.y);
+  const double grow = std::max(0.0, 0.25 * width - (own.hi.z - own.lo.z)) / 2;
+  const double zlo = own.lo.z - grow, zhi = own.hi.z + grow;
   Mesh m;
   std::vector<int> vid(size_t(mi) * mj, -1);
   auto pos = [&](int a, int b, int fa, int fb) {  // neighbour, or self where missing

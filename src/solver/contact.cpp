@@ -53,20 +53,27 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
 
 namespace {
 
-// Adds the penalty of one surface: F = k*(delta-d)*n; -(dF/dx)^T r =
-// k*(n (n.r) - (delta-d) H r).
+// Adds the penalty of one surface. The force grows quadratically over the
+// first half of delta and linearly after, f(pen) = k pen^2/(2s) then
+// k (pen - s/2): continuous with its slope, so the Newton residual is smooth
+// and CG does not zig-zag at the onset of contact.
+// -(dF/dx)^T r = f'(pen) n (n.r) - f(pen) H r.
 bool add_surface(const Contact& c, double d, const double* n, const double* hess, double* force,
-                 const double* r, double* jtr) {
+                 const double* r, double* jtr, double* slope) {
   const double pen = c.thickness - d;
   if (pen <= 0) return false;
-  for (int k = 0; k < 3; ++k) force[k] += c.stiffness * pen * n[k];
+  const double s = 0.5 * c.thickness, k = c.stiffness;
+  const double f = pen < s ? k * pen * pen / (2 * s) : k * (pen - 0.5 * s);
+  const double df = pen < s ? k * pen / s : k;
+  for (int i = 0; i < 3; ++i) force[i] += f * n[i];
+  if (slope) *slope += df;
   if (jtr) {
     const double nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
     for (int a = 0; a < 3; ++a) {
       double hr = 0;
       if (hess)
         for (int b = 0; b < 3; ++b) hr += hess[3 * a + b] * r[b];
-      jtr[a] += c.stiffness * (n[a] * nr - pen * hr);
+      jtr[a] += df * n[a] * nr - f * hr;
     }
   }
   return true;
@@ -75,21 +82,21 @@ bool add_surface(const Contact& c, double d, const double* n, const double* hess
 }  // namespace
 
 bool contact_force(const Contact& c, const double* x, double* force, const double* r,
-                   double* jac_t_r) {
+                   double* jac_t_r, double* slope) {
   force[0] = force[1] = force[2] = 0;
   bool hit = false;
   const Obstacle& o = c.obstacle;
   double n[3], hess[9];
   if (o.shape == ObstacleShape::Box) {
     const double d = box_distance(o, x, n, hess);
-    hit |= add_surface(c, d, n, hess, force, r, jac_t_r);
+    hit |= add_surface(c, d, n, hess, force, r, jac_t_r, slope);
   } else if (o.shape == ObstacleShape::Sphere) {
     const double d = sphere_distance(o, x, n, hess);
-    hit |= add_surface(c, d, n, hess, force, r, jac_t_r);
+    hit |= add_surface(c, d, n, hess, force, r, jac_t_r, slope);
   }
   if (o.floor) {
     const double nz[3] = {0, 0, 1};
-    hit |= add_surface(c, x[2] - o.floor_z, nz, nullptr, force, r, jac_t_r);
+    hit |= add_surface(c, x[2] - o.floor_z, nz, nullptr, force, r, jac_t_r, slope);
   }
   return hit;
 }

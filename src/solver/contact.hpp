@@ -1,7 +1,7 @@
 #pragma once
 // Rigid obstacles (box, sphere, floor) as a penalty force: a particle closer
-// than the contact thickness delta to a surface is pushed out with
-// k*(delta - d)*n. Signed distance d, its gradient n and Hessian come from
+// than the contact thickness delta to a surface is pushed out along n, with
+// a force rising smoothly from zero at distance delta. Signed distance d, its gradient n and Hessian come from
 // the obstacle's shape; the Newton cost needs all three.
 #include "solver/scene.hpp"
 
@@ -29,9 +29,9 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
 
 // Penalty force on a particle at x. If jac_t_r is non-null, also adds
 // -(dF/dx)^T r to it (the contact part of the Newton cost's gradient).
-// Returns true when in contact.
+// If slope is non-null, adds d|F|/d(penetration) to it. Returns true when in contact.
 bool contact_force(const Contact& c, const double* x, double* force, const double* r = nullptr,
-                   double* jac_t_r = nullptr);
+                   double* jac_t_r = nullptr, double* slope = nullptr);
 
 // Deepest penetration below zero distance over all shapes (0 if outside all).
 double penetration(const Obstacle& o, const double* x);

@@ -54,9 +54,10 @@ void Evaluator::edge_forces(int64_t s, const double* z) {
   const BandExcess ex = m_.use_stretch ? m_.stretch[d].excess(f, L / L0 - 1.0) : BandExcess{};
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam;
-  cost_e_[s] = 0.5 * sigma * sigma;
+  const double mem = (f - c_.f1[c_.layout.tension() - c_.layout.tension() + s]) * lam;
+  cost_e_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
   gq_e_[s] = sigma * lam * ex.dr_dq / L0;
-  gf_e_[s] = sigma * lam;
+  gf_e_[s] = (sigma + m_.memory * mem) * lam;
 }
 
 void Evaluator::triple_forces(int64_t s, const double* z) {
@@ -71,9 +72,10 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
   const BandExcess ex = m_.use_bend ? m_.bend[d].excess(f, th / Lm) : BandExcess{};
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam;
-  cost_t_[s] = 0.5 * sigma * sigma;
+  const double mem = (f - c_.f1[c_.layout.moment() - c_.layout.tension() + s]) * lam;
+  cost_t_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
   gq_t_[s] = sigma * lam * ex.dr_dq / Lm;
-  gf_t_[s] = sigma * lam;
+  gf_t_[s] = (sigma + m_.memory * mem) * lam;
 }
 
 void Evaluator::shear_forces(int64_t s, const double* z) {
@@ -85,9 +87,10 @@ void Evaluator::shear_forces(int64_t s, const double* z) {
   const BandExcess ex = m_.use_shear ? m_.shear.excess(f, phi) : BandExcess{};
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
   const double sigma = ex.r * lam;
-  cost_s_[s] = 0.5 * sigma * sigma;
+  const double mem = (f - c_.f1[c_.layout.shear() - c_.layout.tension() + s]) * lam;
+  cost_s_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
   gq_s_[s] = sigma * lam * ex.dr_dq;
-  gf_s_[s] = sigma * lam;
+  gf_s_[s] = (sigma + m_.memory * mem) * lam;
 }
 
 // Visits the per-slot buffer entries that belong to particle p, always in the
@@ -270,10 +273,12 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
   // band stiffness (lambda * slope * dq/dx)^2, written to the first entry of
   // the particle's buffer slot; the element force's own diagonal directly.
-  auto band_slope = [](const Band& b, double q) {
-    const BandValue v = b.at(q);
-    return std::max(std::fabs(v.dlo), std::fabs(v.dhi));
+  // A band only stiffens its element where the force lies outside it (the
+  // exact Gauss-Newton diagonal); inside, the force is free at no cost.
+  auto band_slope = [](const Band& b, double f, double q) {
+    return std::fabs(b.excess(f, q).dr_dq);
   };
+  auto outside = [](const Band& b, double f, double q) { return b.excess(f, q).r != 0 ? 1.0 : 0.0; };
   for_each_item(lists_.edges, pol_, [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
@@ -281,10 +286,11 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     V g[2];
     const double L = edge_length(at(z, p), at(z, q), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
-    const double geo = f * w / L, band = w * band_slope(m_.stretch[d], L / L0 - 1) / L0;
+    const double eps = L / L0 - 1;
+    const double geo = f * w / L, band = w * band_slope(m_.stretch[d], f, eps) / L0;
     for (int k = 0; k < 2; ++k) buf_e_[6 * s + 3 * k] = (2 * geo * geo + band * band) * inv2;
     const double nf = double(c_.free(p)) + double(c_.free(q));
-    diag[c_.layout.tension() + s] = (w * w * nf + w * w) * inv2;
+    diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
   });
   for_each_item(lists_.triples, pol_, [&](int64_t s) {
     const int64_t p = s >> 1;
@@ -294,7 +300,7 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     const V n = load3<double>(&c_.bend_axis[3 * s]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s], f = z[c_.layout.moment() + s];
-    const double slope = band_slope(m_.bend[d], th / Lm) * w / (Lm * Lm);
+    const double slope = band_slope(m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
@@ -303,14 +309,15 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
       nf += c_.free(ids[k]) ? g2 : 0;
     }
     const double lam = w / Lm;
-    diag[c_.layout.moment() + s] = (w * w * nf + lam * lam) * inv2;
+    diag[c_.layout.moment() + s] =
+        (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
   for_each_item(lists_.shears, pol_, [&](int64_t s) {
     const int64_t ids[3] = {s, c_.next[0][s], c_.next[1][s]};
     V g[3];
     const double phi = shear_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
-    const double slope = band_slope(m_.shear, phi) * A / Lr;
+    const double slope = band_slope(m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
@@ -319,17 +326,22 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
       nf += c_.free(ids[k]) ? g2 : 0;
     }
     const double lam = A / Lr;
-    diag[c_.layout.shear() + s] = (A * A * nf + lam * lam) * inv2;
+    diag[c_.layout.shear() + s] =
+        (A * A * nf + lam * lam * (outside(m_.shear, f, phi) + m_.memory)) * inv2;
   });
   const double ca = m_.accel_coeff();
   for_each_item(lists_.particles, pol_, [&](int64_t p) {
-    double fc[3];
-    const bool touching = contact_force(m_.contact, z + 3 * p, fc);
-    const double inertia = c_.mass[p] * ca + (touching ? m_.contact.stiffness : 0.0);
+    double fc[3], slope = 0;
+    contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
+    const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) { dsum += v[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   });
+  // An unknown nothing depends on has a zero gradient too: any scale will do.
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < nz; ++k)
+    if (!(diag[k] > 0)) diag[k] = 1.0;
 }
 
 // ---- numeric gradient (reference mode) ------------------------------------

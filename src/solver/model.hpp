@@ -19,6 +19,7 @@ struct Model {
   Contact contact;
   double dt = 1e-3, dt_prev = 1e-3;  // this step and the previous one, s
   double force_scale = 1;            // F0: residual forces are measured in F0 (a particle's weight)
+  double memory = 1.0;               // weight of the force memory term
   // Term switches (tests check each term's gradient alone).
   bool use_newton = true, use_stretch = true, use_bend = true, use_shear = true;
 

@@ -39,6 +39,10 @@ struct SolverSpec {
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
   double rest_speed = 0.0;      // m/s; > 0 ends the run once max speed is below it
   double contact_thickness = 0.0;  // m; 0 = automatic (half a grid spacing)
+  // Weight of the memory term 1/2 mu |(f - f_history) lambda / F0|^2: inside a
+  // KES band a force costs nothing, so without it the minimum is not unique;
+  // with it the force keeps its history value unless the cloth moves it.
+  double memory = 1.0;
 };
 
 struct OutputSpec {

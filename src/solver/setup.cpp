@@ -48,6 +48,7 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   m.contact.thickness = delta;
   m.contact.stiffness = 1e4 * weight / delta;
   m.dt = m.dt_prev = scene.solver.dt;
+  m.memory = scene.solver.memory;
   return m;
 }
 
@@ -64,6 +65,7 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   c.x1.assign(3 * n, 0.0);
   c.x2.assign(3 * n, 0.0);
   c.mass.assign(n, 0.0);
+  c.f1.assign(5 * n, 0.0);
   c.flags.assign(n, kActive);
   c.level.assign(n, 0);
   c.edge_on.assign(2 * n, 0);

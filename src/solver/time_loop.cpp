@@ -37,8 +37,11 @@ void TimeLoop::freeze_bend_axes() {
   }
 }
 
+// The first guess of a step: the history moved on with its velocity and
+// gravity (exact for a free fall); CG corrects where the cloth is held.
 void TimeLoop::predict() {
   const double ratio = c_.dt / c_.dt_prev;
+  const double reach = 1.0 / m_.accel_coeff();  // x moved by g/ca gives a = g
   double* x = c_.x();
   const ActiveList& L = lists_.particles;
 #pragma omp parallel for schedule(static)
@@ -46,7 +49,7 @@ void TimeLoop::predict() {
     const int64_t p = L.items[k];
     for (int i = 0; i < 3; ++i) {
       const int64_t u = 3 * p + i;
-      x[u] = c_.x1[u] + ratio * (c_.x1[u] - c_.x2[u]);
+      x[u] = c_.x1[u] + ratio * (c_.x1[u] - c_.x2[u]) + m_.gravity[i] * reach;
     }
   }
 }
@@ -114,6 +117,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   StepStats st;
   st.step = c_.step + 1;
   std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
+  std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.f1.begin());
   freeze_bend_axes();
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;

@@ -1,0 +1,98 @@
+// The model's behaviour: CG descent, free fall, mass, contact.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "world.hpp"
+
+namespace drape::test {
+namespace {
+
+Scene small_drape() {
+  Scene s;
+  s.cloth.particles = {13, 13};
+  s.cloth.size = {0.3, 0.3};
+  s.cloth.height = 0.13;  // above the box top by more than the contact thickness (h/2)
+  s.cloth.tile = 5;
+  s.obstacle.shape = ObstacleShape::Box;
+  s.obstacle.center = {0.0, 0.0, 0.05};
+  s.obstacle.size = {0.1, 0.1, 0.1};
+  s.obstacle.floor = true;
+  s.solver.dt = 2e-3;
+  s.solver.max_iterations = 400;
+  s.solver.tolerance = 1e-6;
+  return s;
+}
+
+TEST(ConjugateGradient, LowersTheCostAtEveryIterationAndConverges) {
+  Scene s = small_drape();
+  s.cloth.height = 0.1 + 0.0125 + 0.002;  // lands on the box: CG has work to do
+  World w(s, test_fabric());
+  Timers tm;
+  int total = 0;
+  for (int step = 0; step < 15; ++step) {
+    std::vector<double> costs;  // of the last attempt (a step may be retried with a shorter dt)
+    const StepStats st = w.loop->step(tm, [&](int it, double c) {
+      if (it == 1) costs.clear();
+      costs.push_back(c);
+    });
+    total += int(costs.size());
+    for (size_t k = 1; k < costs.size(); ++k)
+      ASSERT_LT(costs[k], costs[k - 1]) << "step " << st.step << " iteration " << k + 1;
+    EXPECT_TRUE(st.converged) << "step " << st.step;
+    EXPECT_LT(st.cost_per_particle, w.scene.solver.tolerance);
+  }
+  EXPECT_GT(total, 100) << "the landing should have needed CG iterations";
+}
+
+TEST(FreeFall, FollowsGravity) {
+  Scene s = flat_scene(9, 8, 0.2, 0.15);
+  s.solver.dt = 1e-3;
+  s.solver.dt_max = 1e-3;  // fixed step: compare with the exact parabola
+  s.solver.tolerance = 1e-9;
+  s.solver.max_iterations = 1000;
+  World w(s, test_fabric());
+  const std::vector<double> x0(w.cloth.z.begin(), w.cloth.z.begin() + 3 * w.cloth.grid.n());
+  Timers tm;
+  for (int k = 0; k < 20; ++k) {
+    const StepStats st = w.loop->step(tm);
+    // No spurious internal force: the first guess already balances.
+    EXPECT_LT(st.cost.total(), 1e-20) << "step " << st.step;
+  }
+  const double t = w.cloth.time, g = 9.80665;
+  ASSERT_NEAR(t, 0.02, 1e-12);
+  for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
+    EXPECT_NEAR(w.cloth.x()[3 * p + 0], x0[3 * p + 0], 1e-9);
+    EXPECT_NEAR(w.cloth.x()[3 * p + 1], x0[3 * p + 1], 1e-9);
+    EXPECT_NEAR(w.cloth.x()[3 * p + 2], x0[3 * p + 2] - 0.5 * g * t * t, 1e-9) << "particle " << p;
+  }
+}
+
+TEST(Mass, TotalEqualsArealDensityTimesArea) {
+  for (auto n : {std::array<int, 2>{3, 3}, std::array<int, 2>{17, 9}, std::array<int, 2>{64, 33}}) {
+    Scene s = flat_scene(n[0], n[1], 0.7, 0.4);
+    World w(s, test_fabric());
+    const double expected = w.fabric.density * 0.7 * 0.4;
+    EXPECT_NEAR(w.cloth.total_mass(), expected, 1e-12 * expected) << n[0] << "x" << n[1];
+  }
+}
+
+TEST(Contact, NoParticleEndsInsideTheBox) {
+  Scene s = small_drape();
+  s.cloth.height = 0.1 + 0.0125 + 0.002;  // 2 mm above the contact margin: lands at once
+  World w(s, test_fabric());
+  Timers tm;
+  const Obstacle& box = w.model.contact.obstacle;
+  int touching = 0;
+  for (int k = 0; k < 30; ++k) w.loop->step(tm);
+  double n[3];
+  for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
+    const double d = box_distance(box, w.cloth.x() + 3 * p, n, nullptr);
+    EXPECT_GE(d, 0.0) << "particle " << p << " is inside the box";
+    if (d < w.model.contact.thickness) ++touching;
+  }
+  EXPECT_GT(touching, 9) << "the cloth should have landed on the box";
+}
+
+}  // namespace
+}  // namespace drape::test
