@@ -75,6 +75,7 @@ struct Summary {
   int max_step_iterations = 0, unconverged = 0;
   double dt_min = 1e300, dt_max = 0;
   bool at_rest = false;
+  bool stopped_by_wall_limit = false;
   StepStats last;
 };
 
@@ -98,6 +99,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.begin_array("grid").value(nullptr, cloth.grid.ni).value(nullptr, cloth.grid.nj).end_array();
   j.value("free_particles", (long long)free_particles);
   j.value("steps", s.steps);
+  j.value("steps_requested", scene.solver.steps);
   j.value("iterations", s.iterations);
   j.value("evaluations", s.evaluations);
   j.value("simulated_seconds", cloth.time);
@@ -115,6 +117,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .end_object();
   j.value("max_speed", s.last.max_speed);
   j.value("at_rest", s.at_rest);
+  j.value("stopped_by_wall_limit", s.stopped_by_wall_limit);
   j.value("rest_speed", scene.solver.rest_speed);
   j.value("max_penetration", penetration_depth);
   j.value("projections", s.projections);
@@ -216,6 +219,17 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       h5->write_frame(frame_of(cloth, blocks));
     }
     if (sum.at_rest) break;
+    // Every rank must stop at the same step: rank 0's clock decides.
+    int out_of_time = scene.solver.wall_limit > 0 &&
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
+                          scene.solver.wall_limit;
+    MPI_Bcast(&out_of_time, 1, MPI_INT, 0, comm);
+    if (out_of_time && !last) {
+      sum.stopped_by_wall_limit = true;
+      if (talk) std::printf("wall limit of %.0f s reached after step %d: ending the run\n",
+                            scene.solver.wall_limit, st.step);
+      break;
+    }
   }
   if (scene.solver.rest_speed <= 0) sum.at_rest = sum.last.max_speed < 1e-3;
   const double depth = max_penetration(cloth, model, lists, red);

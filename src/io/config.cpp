@@ -64,6 +64,7 @@ const KeySpec kKeys[] = {
     {"solver", "rest_speed", Kind::Float},
     {"solver", "contact_thickness", Kind::Float},
     {"solver", "memory", Kind::Float},
+    {"solver", "wall_limit", Kind::Float},
     {"output", "every", Kind::Int},
     {"output", "picture", Kind::Bool},
     {"parallel", "schedule", Kind::String},
@@ -466,6 +467,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("solver.rest_speed", s.solver.rest_speed);
   r.get("solver.contact_thickness", s.solver.contact_thickness);
   r.get("solver.memory", s.solver.memory);
+  r.get("solver.wall_limit", s.solver.wall_limit);
   r.get("output.every", s.output.every);
   r.get("output.picture", s.output.picture);
   r.get_enum("parallel.schedule", s.parallel.schedule,
@@ -533,6 +535,7 @@ void validate(const Config& cfg, const Scene& s) {
   check(v.damping >= 0 && v.damping < 1, "solver.damping", "must be in [0, 1)" + got(v.damping));
   check(v.rest_speed >= 0, "solver.rest_speed", "must be >= 0" + got(v.rest_speed));
   check(v.memory >= 0, "solver.memory", "must be >= 0" + got(v.memory));
+  check(v.wall_limit >= 0, "solver.wall_limit", "must be >= 0 (0: no limit)" + got(v.wall_limit));
   check(v.contact_thickness >= 0, "solver.contact_thickness",
         "must be >= 0 (0: automatic)" + got(v.contact_thickness));
 
@@ -599,6 +602,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "rest_speed", format_double(v.rest_speed), "m/s; > 0 stops once at rest");
   line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");
   line(os, "memory", format_double(v.memory), "weight of the force memory (hysteresis) term");
+  line(os, "wall_limit", format_double(v.wall_limit), "s; stop stepping after this long (0: no limit)");
   os << "\n[output]\n";
   line(os, "every", std::to_string(s.output.every), "frame every N steps (0: final only)");
   line(os, "picture", b(s.output.picture), "drape.png of the final state");

@@ -32,17 +32,18 @@ struct SolverSpec {
   double dt = 1e-3;             // s, first step (adaptive afterwards)
   double dt_min = 1e-5;         // s
   double dt_max = 4e-3;         // s
-  int steps = 200;              // time steps at most
+  int steps = 2000;             // time steps at most
   int max_iterations = 200;     // CG iterations per step at most
   double tolerance = 1e-6;      // converged when cost per active particle < this
   GradientMode gradient = GradientMode::Analytic;
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
-  double rest_speed = 0.0;      // m/s; > 0 ends the run once max speed is below it
+  double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)
   double contact_thickness = 0.0;  // m; 0 = automatic (half a grid spacing)
   // Weight of the memory term 1/2 mu |(f - f_history) lambda / F0|^2: inside a
   // KES band a force costs nothing, so without it the minimum is not unique;
   // with it the force keeps its history value unless the cloth moves it.
   double memory = 1.0;
+  double wall_limit = 540.0;    // s of stepping at most (0: none); the run then ends cleanly
 };
 
 struct OutputSpec {
