@@ -2,8 +2,10 @@
 // Progress lines on rank 0: one per step (at most every half second), and
 // during a long step one per couple of seconds with the iteration and cost;
 // the ETA extrapolates the mean wall time per step.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <string>
 
 #include "solver/time_loop.hpp"
 
@@ -11,7 +13,9 @@ namespace drape {
 
 class Progress {
  public:
-  Progress(bool on, int steps) : on_(on), steps_(steps), start_(clock::now()), last_(start_) {}
+  // wall_limit > 0: the run ends after that many seconds at the latest.
+  Progress(bool on, int steps, double wall_limit = 0)
+      : on_(on), steps_(steps), limit_(wall_limit), start_(clock::now()), last_(start_) {}
 
   void iteration(int step, int it, double cost) {
     if (!on_) return;
@@ -28,7 +32,8 @@ class Progress {
     const double el = seconds(start_, now);
     if (seconds(last_, now) < 0.5 && st.step != steps_ && st.step > 1) return;
     last_ = now;
-    const double eta = el / st.step * (steps_ - st.step);
+    double eta = el / st.step * (steps_ - st.step);
+    if (limit_ > 0) eta = std::min(eta, std::max(0.0, limit_ - el));
     std::printf("step %5d/%d  t %.4f s  dt %.3g ms  iterations %4d%s  cost %.4e  speed %.3g m/s  ETA %s\n",
                 st.step, steps_, st.time, st.dt * 1e3, st.iterations, st.converged ? "" : " (max)",
                 st.cost.total(), st.max_speed, clock_text(eta).c_str());
@@ -56,6 +61,7 @@ class Progress {
   }
   bool on_;
   int steps_;
+  double limit_;
   clock::time_point start_, last_;
 };
 

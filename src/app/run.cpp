@@ -196,7 +196,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                 DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
                 (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
 
-  Progress progress(talk, scene.solver.steps);
+  Progress progress(talk, scene.solver.steps, scene.solver.wall_limit);
   Summary sum;
   int calm = 0;
   for (int s = 0; s < scene.solver.steps; ++s) {

@@ -101,6 +101,23 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
   return hit;
 }
 
+bool push_out(const Obstacle& o, double clearance, double* x) {
+  bool moved = false;
+  double n[3];
+  double d = o.shape == ObstacleShape::Box      ? box_distance(o, x, n, nullptr)
+             : o.shape == ObstacleShape::Sphere ? sphere_distance(o, x, n, nullptr)
+                                                : clearance;
+  if (d < clearance) {
+    for (int k = 0; k < 3; ++k) x[k] += (clearance - d) * n[k];
+    moved = true;
+  }
+  if (o.floor && x[2] < o.floor_z + clearance) {
+    x[2] = o.floor_z + clearance;
+    moved = true;
+  }
+  return moved;
+}
+
 double penetration(const Obstacle& o, const double* x) {
   double n[3], depth = 0;
   if (o.shape == ObstacleShape::Box) depth = std::max(depth, -box_distance(o, x, n, nullptr));

@@ -33,6 +33,10 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
 bool contact_force(const Contact& c, const double* x, double* force, const double* r = nullptr,
                    double* jac_t_r = nullptr, double* slope = nullptr);
 
+// Moves x out to distance `clearance` from every surface it is closer to.
+// Returns true if it moved.
+bool push_out(const Obstacle& o, double clearance, double* x);
+
 // Deepest penetration below zero distance over all shapes (0 if outside all).
 double penetration(const Obstacle& o, const double* x);
 

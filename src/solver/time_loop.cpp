@@ -51,6 +51,9 @@ void TimeLoop::predict() {
       const int64_t u = 3 * p + i;
       x[u] = c_.x1[u] + ratio * (c_.x1[u] - c_.x2[u]) + m_.gravity[i] * reach;
     }
+    // A fast particle would be predicted deep inside an obstacle, where the
+    // penalty cost is enormous and CG stalls: start it on the contact margin.
+    push_out(m_.contact.obstacle, m_.contact.thickness, x + 3 * p);
   }
 }
 
@@ -85,18 +88,8 @@ void TimeLoop::accept(StepStats& st) {
     const int64_t p = L.items[k];
     double* xp = x + 3 * p;
     // Safety net: a particle that ended inside an obstacle is put back on its surface.
-    const double depth = penetration(ob, xp);
-    if (depth > 0) {
-      double n[3];
-      if (ob.floor && xp[2] < ob.floor_z) xp[2] = ob.floor_z;
-      if (ob.shape == ObstacleShape::Box && box_distance(ob, xp, n, nullptr) < 0) {
-        const double d = box_distance(ob, xp, n, nullptr);
-        for (int i = 0; i < 3; ++i) xp[i] -= d * n[i];
-      }
-      if (ob.shape == ObstacleShape::Sphere && sphere_distance(ob, xp, n, nullptr) < 0) {
-        const double d = sphere_distance(ob, xp, n, nullptr);
-        for (int i = 0; i < 3; ++i) xp[i] -= d * n[i];
-      }
+    if (penetration(ob, xp) > 0) {
+      push_out(ob, 0.0, xp);
       ++pushed;
     }
     double v2 = 0;

@@ -1,0 +1,107 @@
+// Issue 2's figures: time per gradient evaluation and per CG iteration at
+// 1000 x 1000 on one rank, and the finite-difference / analytic gradient time
+// ratio on 100 x 100, both gradients timed in the same run.
+//   build/bench/bench_gradient --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <chrono>
+#include <memory>
+#include <random>
+
+#include "amrc/active_lists.hpp"
+#include "io/kes.hpp"
+#include "solver/time_loop.hpp"
+
+namespace drape {
+namespace {
+
+// A cloth mid-drape: positions jittered, forces spread over their bands.
+struct Bed {
+  Scene scene;
+  Fabric fabric;
+  Cloth cloth;
+  Model model;
+  Tiling tiling;
+  ActiveLists lists;
+  LocalReducer red;
+  LoopPolicy policy;
+  std::unique_ptr<TimeLoop> loop;
+
+  explicit Bed(int n) {
+    scene.cloth.particles = {n, n};
+    fabric = load_fabric("denim-A");
+    cloth = make_cloth(scene, fabric);
+    model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
+    tiling = Tiling(n, n, scene.cloth.tile);
+    std::vector<int> owned;
+    for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
+    build_active_lists(cloth, tiling, owned, lists);
+    loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red, scene.solver);
+    std::mt19937_64 rng(42);
+    std::uniform_real_distribution<double> u(-1, 1);
+    const Layout& L = cloth.layout;
+    for (int64_t k = 0; k < L.tension(); ++k) cloth.z[k] += 0.1 * cloth.grid.hi * u(rng);
+    for (int64_t k = L.tension(); k < L.moment(); ++k) cloth.z[k] = 5.0 * (1 + u(rng));
+    for (int64_t k = L.moment(); k < L.size(); ++k) cloth.z[k] = 1e-3 * u(rng);
+    loop->freeze_bend_axes();
+  }
+};
+
+void BM_Gradient(benchmark::State& state) {
+  static Bed bed(int(state.range(0)));
+  std::vector<double> g(bed.cloth.z.size());
+  for (auto _ : state) {
+    const CostTerms c = bed.loop->evaluator().evaluate(bed.cloth.z.data(), g.data());
+    benchmark::DoNotOptimize(c);
+  }
+  state.counters["particles"] = double(bed.cloth.grid.n());
+  state.counters["threads"] = omp_get_max_threads();
+}
+BENCHMARK(BM_Gradient)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_CgIteration(benchmark::State& state) {
+  static Bed bed(int(state.range(0)));
+  const int per = 10;
+  CgSettings cs;
+  cs.max_iterations = per;
+  cs.tolerance = 0;  // never converged: exactly `per` iterations unless stalled
+  cs.free_particles = bed.loop->free_particles();
+  Timers tm;
+  int iterations = 0;
+  for (auto _ : state) {
+    const CgResult r = bed.loop->minimizer().minimize(bed.loop->evaluator(), bed.cloth.z.data(), cs, tm);
+    iterations += r.iterations;
+  }
+  state.counters["iterations"] = iterations;
+  state.counters["s_per_iteration"] =
+      benchmark::Counter(iterations, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_CgIteration)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
+
+double seconds_of(const std::function<void()>& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Both gradients timed back to back in each repetition: the ratio is a
+// measurement of one run, not of two runs on a shared machine.
+void BM_NumericOverAnalytic(benchmark::State& state) {
+  static Bed bed(int(state.range(0)));
+  std::vector<double> g(bed.cloth.z.size());
+  double analytic = 0, numeric = 0;
+  for (auto _ : state) {
+    analytic += seconds_of([&] { bed.loop->evaluator().evaluate(bed.cloth.z.data(), g.data()); });
+    numeric += seconds_of([&] { bed.loop->evaluator().numeric_gradient(bed.cloth.z.data(), g.data()); });
+  }
+  state.counters["analytic_ms"] = 1e3 * analytic / state.iterations();
+  state.counters["numeric_ms"] = 1e3 * numeric / state.iterations();
+  state.counters["numeric_over_analytic"] = numeric / analytic;
+}
+BENCHMARK(BM_NumericOverAnalytic)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+}  // namespace
+}  // namespace drape
+
+BENCHMARK_MAIN();
