@@ -118,6 +118,14 @@ bool push_out(const Obstacle& o, double clearance, double* x) {
   return moved;
 }
 
+double clearance(const Obstacle& o, const double* x) {
+  double n[3], d = 1e300;
+  if (o.shape == ObstacleShape::Box) d = box_distance(o, x, n, nullptr);
+  if (o.shape == ObstacleShape::Sphere) d = sphere_distance(o, x, n, nullptr);
+  if (o.floor) d = std::min(d, x[2] - o.floor_z);
+  return d;
+}
+
 double penetration(const Obstacle& o, const double* x) {
   double n[3], depth = 0;
   if (o.shape == ObstacleShape::Box) depth = std::max(depth, -box_distance(o, x, n, nullptr));

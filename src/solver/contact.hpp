@@ -37,6 +37,9 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
 // Returns true if it moved.
 bool push_out(const Obstacle& o, double clearance, double* x);
 
+// Signed distance to the nearest surface of any shape (+inf without one).
+double clearance(const Obstacle& o, const double* x);
+
 // Deepest penetration below zero distance over all shapes (0 if outside all).
 double penetration(const Obstacle& o, const double* x);
 

@@ -51,10 +51,28 @@ void TimeLoop::predict() {
       const int64_t u = 3 * p + i;
       x[u] = c_.x1[u] + ratio * (c_.x1[u] - c_.x2[u]) + m_.gravity[i] * reach;
     }
-    // A fast particle would be predicted deep inside an obstacle, where the
-    // penalty cost is enormous and CG stalls: start it on the contact margin.
-    push_out(m_.contact.obstacle, m_.contact.thickness, x + 3 * p);
+    stop_at_margin(p);
   }
+}
+
+// A fast particle would be predicted deep inside an obstacle, where the
+// penalty cost is enormous and CG stalls: shorten its predicted move so it
+// stops where it meets the contact margin (bisection on the move's length;
+// projecting instead could put two particles on one point at an edge).
+void TimeLoop::stop_at_margin(int64_t p) {
+  const Obstacle& ob = m_.contact.obstacle;
+  double* x = c_.x() + 3 * p;
+  const double* x1 = &c_.x1[3 * p];
+  const double target = std::min(m_.contact.thickness, clearance(ob, x1));
+  if (clearance(ob, x) >= target) return;
+  const double move[3] = {x[0] - x1[0], x[1] - x1[1], x[2] - x1[2]};
+  double lo = 0, hi = 1, y[3];
+  for (int it = 0; it < 30; ++it) {
+    const double t = 0.5 * (lo + hi);
+    for (int k = 0; k < 3; ++k) y[k] = x1[k] + t * move[k];
+    (clearance(ob, y) >= target ? lo : hi) = t;
+  }
+  for (int k = 0; k < 3; ++k) x[k] = x1[k] + lo * move[k];
 }
 
 void TimeLoop::check_finite(const StepStats& st) const {

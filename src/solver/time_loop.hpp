@@ -39,6 +39,7 @@ class TimeLoop {
 
  private:
   void predict();
+  void stop_at_margin(int64_t p);
   void accept(StepStats& st);
   void check_finite(const StepStats& st) const;
 

@@ -1,0 +1,75 @@
+// Results do not depend on how many threads ran them, nor on the schedule:
+// the state checksum and the final cost are bitwise the same for 1-4 threads
+// and for active lists, static, dynamic and guided (DESIGN §3).
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cstring>
+
+#include "solver/checksum.hpp"
+#include "world.hpp"
+
+namespace drape::test {
+namespace {
+
+struct Outcome {
+  std::string checksum;
+  double cost;
+  int iterations;
+};
+
+Outcome run(int threads, Schedule schedule) {
+  Scene s;
+  s.cloth.particles = {23, 19};  // tiles of 5: uneven, clipped at the borders
+  s.cloth.size = {0.3, 0.25};
+  s.cloth.tile = 5;
+  s.cloth.height = 0.1 + 0.0068 + 0.0005;  // just above the contact margin (h/2)
+  s.obstacle.center = {0.0, 0.0, 0.05};
+  s.obstacle.size = {0.1, 0.1, 0.1};
+  s.solver.dt = 2e-3;
+  s.solver.max_iterations = 300;
+  s.parallel.schedule = schedule;
+  s.parallel.chunk = 2;
+  omp_set_num_threads(threads);
+  World w(s, test_fabric());
+  Timers tm;
+  Outcome out{};
+  StepStats st;
+  for (int k = 0; k < 6; ++k) {
+    st = w.loop->step(tm);
+    out.iterations += st.iterations;
+  }
+  out.cost = st.cost.total();
+  std::vector<int> all;
+  for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
+  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  return out;
+}
+
+TEST(Determinism, SameBitsForEveryThreadCountAndSchedule) {
+  const Outcome ref = run(1, Schedule::ActiveLists);
+  ASSERT_GT(ref.iterations, 20) << "the scene should make CG work (contact)";
+  for (Schedule sc : {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided})
+    for (int threads : {1, 2, 3, 4}) {
+      const Outcome o = run(threads, sc);
+      EXPECT_EQ(o.checksum, ref.checksum) << to_string(sc) << ", " << threads << " threads";
+      EXPECT_EQ(std::memcmp(&o.cost, &ref.cost, sizeof(double)), 0)
+          << to_string(sc) << ", " << threads << " threads: " << o.cost << " vs " << ref.cost;
+      EXPECT_EQ(o.iterations, ref.iterations);
+    }
+}
+
+TEST(Checksum, ChangesWithAnyBitOfTheState) {
+  Scene s = flat_scene(6, 5, 0.1, 0.1);
+  World w(s, test_fabric());
+  std::vector<int> all;
+  for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
+  const std::string a = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  w.cloth.z[w.cloth.layout.moment() + 7] = 1e-300;  // one tiny moment
+  const std::string b = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  EXPECT_NE(a, b);
+  EXPECT_EQ(a.size(), 32u);
+}
+
+}  // namespace
+}  // namespace drape::test
