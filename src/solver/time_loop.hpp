@@ -40,6 +40,8 @@ class TimeLoop {
  private:
   void predict();
   void stop_at_margin(int64_t p);
+  void stop_all_at_margin();
+  double margin_overshoot() const;
   void accept(StepStats& st);
   void check_finite(const StepStats& st) const;
 
