@@ -73,3 +73,32 @@ TEST(Checksum, ChangesWithAnyBitOfTheState) {
 
 }  // namespace
 }  // namespace drape::test
+
+namespace drape::test {
+namespace {
+
+// Every item of an active list is visited exactly once, whatever the list's
+// length against the thread count, the tile split and the schedule.
+TEST(ActiveLists, EveryItemProcessedExactlyOnce) {
+  for (int threads : {1, 2, 3, 4}) {
+    omp_set_num_threads(threads);
+    for (int64_t n : {0, 1, 2, 3, 4, 5, 7, 8, 13, 64, 1001}) {
+      ActiveList list;
+      for (int64_t k = 0; k < n; ++k) list.items.push_back(3 * k + 1);  // sparse slot ids
+      const int tiles = 5;  // uneven runs, some empty
+      for (int t = 0; t <= tiles; ++t) list.tile_begin.push_back(n * t * t / (tiles * tiles));
+      for (Schedule sc : {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided}) {
+        std::vector<int> seen(3 * n + 2, 0);
+        for_each_item(list, LoopPolicy{sc, 1}, [&](int64_t s) { seen[s] += 1; });
+        for (int64_t k = 0; k < n; ++k)
+          ASSERT_EQ(seen[3 * k + 1], 1) << to_string(sc) << ", " << threads << " threads, n " << n;
+        int64_t total = 0;
+        for (int v : seen) total += v;
+        ASSERT_EQ(total, n);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace drape::test
