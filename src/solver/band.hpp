@@ -30,6 +30,20 @@ class Band {
                      const Curve& unload = {});
 
   BandValue at(double q) const;
+
+  // The hysteresis (stop-operator) force for strain q given the force f1 the
+  // element had at the start of the step: f1 while it stays inside the band,
+  // else the band edge it was pushed past. Memory means: this, not f1.
+  struct Stop {
+    double f;     // target force
+    double df_dq; // its slope (0 inside the band)
+  };
+  Stop stop(double f1, double q) const {
+    const BandValue v = at(q);
+    if (f1 > v.hi) return {v.hi, v.dhi};
+    if (f1 < v.lo) return {v.lo, v.dlo};
+    return {f1, 0.0};
+  }
   BandExcess excess(double f, double q) const {
     const BandValue v = at(q);
     if (f > v.hi) return {f - v.hi, -v.dhi};

@@ -51,12 +51,13 @@ void Evaluator::edge_forces(int64_t s, const double* z) {
   const double f = z[c_.layout.tension() + s];
   put(&buf_e_[6 * s], g[0], f * w);
   put(&buf_e_[6 * s + 3], g[1], f * w);
-  const BandExcess ex = m_.use_stretch ? m_.stretch[d].excess(f, L / L0 - 1.0) : BandExcess{};
+  const double eps = L / L0 - 1.0;
+  const BandExcess ex = m_.use_stretch ? m_.stretch[d].excess(f, eps) : BandExcess{};
+  const Band::Stop st = m_.stretch[d].stop(c_.f1[s], eps);
   const double lam = w / m_.force_scale;
-  const double sigma = ex.r * lam;
-  const double mem = (f - c_.f1[c_.layout.tension() - c_.layout.tension() + s]) * lam;
+  const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_e_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_e_[s] = sigma * lam * ex.dr_dq / L0;
+  gq_e_[s] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / L0;
   gf_e_[s] = (sigma + m_.memory * mem) * lam;
 }
 
@@ -69,12 +70,13 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const double f = z[c_.layout.moment() + s];
   for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], g[k], f * w);
-  const BandExcess ex = m_.use_bend ? m_.bend[d].excess(f, th / Lm) : BandExcess{};
+  const double q = th / Lm;
+  const BandExcess ex = m_.use_bend ? m_.bend[d].excess(f, q) : BandExcess{};
+  const Band::Stop st = m_.bend[d].stop(c_.f1[c_.layout.moment() - c_.layout.tension() + s], q);
   const double lam = w / (Lm * m_.force_scale);
-  const double sigma = ex.r * lam;
-  const double mem = (f - c_.f1[c_.layout.moment() - c_.layout.tension() + s]) * lam;
+  const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_t_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_t_[s] = sigma * lam * ex.dr_dq / Lm;
+  gq_t_[s] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / Lm;
   gf_t_[s] = (sigma + m_.memory * mem) * lam;
 }
 
@@ -85,11 +87,11 @@ void Evaluator::shear_forces(int64_t s, const double* z) {
   const double f = z[c_.layout.shear() + s];
   for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], g[k], f * A);
   const BandExcess ex = m_.use_shear ? m_.shear.excess(f, phi) : BandExcess{};
+  const Band::Stop st = m_.shear.stop(c_.f1[c_.layout.shear() - c_.layout.tension() + s], phi);
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
-  const double sigma = ex.r * lam;
-  const double mem = (f - c_.f1[c_.layout.shear() - c_.layout.tension() + s]) * lam;
+  const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_s_[s] = sigma * lam * ex.dr_dq;
+  gq_s_[s] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam;
   gf_s_[s] = (sigma + m_.memory * mem) * lam;
 }
 
@@ -275,8 +277,11 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
   // the particle's buffer slot; the element force's own diagonal directly.
   // A band only stiffens its element where the force lies outside it (the
   // exact Gauss-Newton diagonal); inside, the force is free at no cost.
-  auto band_slope = [](const Band& b, double f, double q) {
-    return std::fabs(b.excess(f, q).dr_dq);
+  const double mu = m_.memory;
+  auto band_slope = [mu, this](int64_t slot, const Band& b, double f, double q) {
+    const double stop = b.stop(c_.f1[slot], q).df_dq;
+    const double r = b.excess(f, q).dr_dq;
+    return std::sqrt(r * r + mu * stop * stop);
   };
   auto outside = [](const Band& b, double f, double q) { return b.excess(f, q).r != 0 ? 1.0 : 0.0; };
   for_each_item(lists_.edges, pol_, [&](int64_t s) {
@@ -287,7 +292,7 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     const double L = edge_length(at(z, p), at(z, q), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
     const double eps = L / L0 - 1;
-    const double geo = f * w / L, band = w * band_slope(m_.stretch[d], f, eps) / L0;
+    const double geo = f * w / L, band = w * band_slope(s, m_.stretch[d], f, eps) / L0;
     for (int k = 0; k < 2; ++k) buf_e_[6 * s + 3 * k] = (2 * geo * geo + band * band) * inv2;
     const double nf = double(c_.free(p)) + double(c_.free(q));
     diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
@@ -300,7 +305,8 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     const V n = load3<double>(&c_.bend_axis[3 * s]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s], f = z[c_.layout.moment() + s];
-    const double slope = band_slope(m_.bend[d], f, th / Lm) * w / (Lm * Lm);
+    const double slope =
+        band_slope(c_.layout.moment() - c_.layout.tension() + s, m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
@@ -317,7 +323,7 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     V g[3];
     const double phi = shear_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
-    const double slope = band_slope(m_.shear, f, phi) * A / Lr;
+    const double slope = band_slope(c_.layout.shear() - c_.layout.tension() + s, m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
