@@ -197,6 +197,16 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                 (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
 
   Progress progress(talk, scene.solver.steps, scene.solver.wall_limit);
+  // The budget is checked every iteration, on rank 0's clock, so that every
+  // rank stops at the same iteration.
+  auto over_budget = [&] {
+    int over = scene.solver.wall_limit > 0 &&
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
+                   scene.solver.wall_limit;
+    MPI_Bcast(&over, 1, MPI_INT, 0, comm);
+    return over != 0;
+  };
+  loop.stop_requested = over_budget;
   Summary sum;
   int calm = 0;
   for (int s = 0; s < scene.solver.steps; ++s) {
@@ -219,12 +229,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       h5->write_frame(frame_of(cloth, blocks));
     }
     if (sum.at_rest) break;
-    // Every rank must stop at the same step: rank 0's clock decides.
-    int out_of_time = scene.solver.wall_limit > 0 &&
-                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
-                          scene.solver.wall_limit;
-    MPI_Bcast(&out_of_time, 1, MPI_INT, 0, comm);
-    if (out_of_time && !last) {
+    if ((st.stopped || over_budget()) && !last) {
       sum.stopped_by_wall_limit = true;
       if (talk) std::printf("wall limit of %.0f s reached after step %d: ending the run\n",
                             scene.solver.wall_limit, st.step);

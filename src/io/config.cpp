@@ -60,6 +60,7 @@ const KeySpec kKeys[] = {
     {"solver", "max_iterations", Kind::Int},
     {"solver", "tolerance", Kind::Float},
     {"solver", "gradient", Kind::String},
+    {"solver", "method", Kind::String},
     {"solver", "damping", Kind::Float},
     {"solver", "rest_speed", Kind::Float},
     {"solver", "contact_thickness", Kind::Float},
@@ -463,6 +464,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("solver.max_iterations", s.solver.max_iterations);
   r.get("solver.tolerance", s.solver.tolerance);
   r.get_enum("solver.gradient", s.solver.gradient, {GradientMode::Analytic, GradientMode::Numeric});
+  r.get_enum("solver.method", s.solver.method, {SolverMethod::Newton, SolverMethod::Cg});
   r.get("solver.damping", s.solver.damping);
   r.get("solver.rest_speed", s.solver.rest_speed);
   r.get("solver.contact_thickness", s.solver.contact_thickness);
@@ -598,6 +600,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "max_iterations", std::to_string(v.max_iterations), "CG iterations per step at most");
   line(os, "tolerance", format_double(v.tolerance), "cost per active particle");
   line(os, "gradient", quote(to_string(v.gradient)), "analytic | numeric");
+  line(os, "method", quote(to_string(v.method)), "newton (Newton + linear CG) | cg (the paper's nonlinear CG)");
   line(os, "damping", format_double(v.damping), "fraction of velocity removed per step");
   line(os, "rest_speed", format_double(v.rest_speed), "m/s; > 0 stops once at rest");
   line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");

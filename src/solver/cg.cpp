@@ -85,6 +85,10 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
       res.converged = true;
       break;
     }
+    if (st.stop_requested && st.stop_requested()) {
+      res.stopped = true;
+      break;
+    }
     double gd = dot(g, d);
     if (!(gd < 0)) {  // not a descent direction: restart
 #pragma omp parallel for schedule(static)

@@ -16,6 +16,9 @@ struct CgSettings {
   int restart_every = 50;    // steepest-descent restart period
   bool numeric = false;      // finite-difference gradient (reference mode)
   int64_t free_particles = 1;  // global count, normalises the cost
+  // Asked once per iteration; true ends the minimisation (wall-clock budget,
+  // signals). Must answer the same on every rank: the caller makes it collective.
+  std::function<bool()> stop_requested;
 };
 
 struct CgResult {
@@ -23,6 +26,7 @@ struct CgResult {
   int evaluations = 0;
   bool converged = false;
   bool stalled = false;  // no descent possible (at machine precision)
+  bool stopped = false;  // stop_requested() said so
   CostTerms cost;
   double cost_per_particle = 0;
 };

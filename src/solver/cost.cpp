@@ -95,25 +95,6 @@ void Evaluator::shear_forces(int64_t s, const double* z) {
   gf_s_[s] = (sigma + m_.memory * mem) * lam;
 }
 
-// Visits the per-slot buffer entries that belong to particle p, always in the
-// same order: this fixed order is what makes the sums reproducible.
-template <class Add>
-void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
-                       const std::vector<double>& s, Add&& add) const {
-  for (int d = 0; d < 2; ++d) {
-    const int64_t pv = c_.prev[d][p], nx = c_.next[d][p];
-    if (c_.edge_on[2 * p + d]) add(&e[6 * (2 * p + d)]);
-    if (pv >= 0 && c_.edge_on[2 * pv + d]) add(&e[6 * (2 * pv + d) + 3]);
-    if (nx >= 0 && c_.triple_on[2 * nx + d]) add(&t[9 * (2 * nx + d)]);
-    if (c_.triple_on[2 * p + d]) add(&t[9 * (2 * p + d) + 3]);
-    if (pv >= 0 && c_.triple_on[2 * pv + d]) add(&t[9 * (2 * pv + d) + 6]);
-  }
-  if (c_.shear_on[p]) add(&s[9 * p]);
-  const int64_t q0 = c_.prev[0][p], q1 = c_.prev[1][p];
-  if (q0 >= 0 && c_.shear_on[q0]) add(&s[9 * q0 + 3]);
-  if (q1 >= 0 && c_.shear_on[q1]) add(&s[9 * q1 + 6]);
-}
-
 // ---- pass 2: Newton residual per free particle ---------------------------
 
 void Evaluator::particle_residual(int64_t p, const double* z) {

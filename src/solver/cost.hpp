@@ -41,12 +41,26 @@ class Evaluator {
   // scaling of the unknowns. Entries of non-unknowns are set to 1.
   void scaling_diagonal(const double* z, double* diag);
 
+  // --- the Newton solver's view (src/solver/stiffness.cpp) ---
+  // Sets every active element force to its hysteresis target (Band::stop) at
+  // the positions in z: there the band and memory costs vanish and the cost
+  // is the Newton term alone, a function of the positions.
+  void hysteresis_forces(double* z);
+  // Kv = dr/dx v for the Newton residual r (N) with the forces at their
+  // targets: mass, material stiffness, the stretch geometric term and the
+  // contact normal term (the indefinite bending/shear geometric terms are
+  // left out so that K stays positive definite). x entries only; others 0.
+  void stiffness_product(const double* z, const double* v, double* kv);
+  // Its diagonal (per position unknown; 1 elsewhere).
+  void stiffness_diagonal(const double* z, double* diag);
+
   // Per-slot bending cost of the last evaluate() (the AMRC criterion).
   const std::vector<double>& triple_cost() const { return cost_t_; }
   // Newton residual (scaled, 3 per particle) of the last evaluate().
   const std::vector<double>& residual() const { return rho_; }
 
   const ActiveLists& lists() const { return lists_; }
+  double force_scale() const { return m_.force_scale; }
 
  private:
   void edge_forces(int64_t s, const double* z);
@@ -77,5 +91,24 @@ class Evaluator {
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
 };
+
+// Visits the per-slot buffer entries that belong to particle p, always in the
+// same order: this fixed order is what makes the sums reproducible.
+template <class Add>
+void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
+                       const std::vector<double>& s, Add&& add) const {
+  for (int d = 0; d < 2; ++d) {
+    const int64_t pv = c_.prev[d][p], nx = c_.next[d][p];
+    if (c_.edge_on[2 * p + d]) add(&e[6 * (2 * p + d)]);
+    if (pv >= 0 && c_.edge_on[2 * pv + d]) add(&e[6 * (2 * pv + d) + 3]);
+    if (nx >= 0 && c_.triple_on[2 * nx + d]) add(&t[9 * (2 * nx + d)]);
+    if (c_.triple_on[2 * p + d]) add(&t[9 * (2 * p + d) + 3]);
+    if (pv >= 0 && c_.triple_on[2 * pv + d]) add(&t[9 * (2 * pv + d) + 6]);
+  }
+  if (c_.shear_on[p]) add(&s[9 * p]);
+  const int64_t q0 = c_.prev[0][p], q1 = c_.prev[1][p];
+  if (q0 >= 0 && c_.shear_on[q0]) add(&s[9 * q0 + 3]);
+  if (q1 >= 0 && c_.shear_on[q1]) add(&s[9 * q1 + 6]);
+}
 
 }  // namespace drape

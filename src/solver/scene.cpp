@@ -30,4 +30,12 @@ const char* to_string(Schedule s) {
   return "?";
 }
 
+const char* to_string(SolverMethod m) {
+  switch (m) {
+    case SolverMethod::Newton: return "newton";
+    case SolverMethod::Cg: return "cg";
+  }
+  return "?";
+}
+
 }  // namespace drape

@@ -9,6 +9,7 @@ namespace drape {
 enum class ObstacleShape { Box, Sphere, None };
 enum class GradientMode { Analytic, Numeric };
 enum class Schedule { ActiveLists, Static, Dynamic, Guided };
+enum class SolverMethod { Newton, Cg };
 
 struct ClothSpec {
   std::array<int, 2> particles{1000, 1000};  // NI (warp, i) x NJ (weft, j)
@@ -36,6 +37,9 @@ struct SolverSpec {
   int max_iterations = 200;     // CG iterations per step at most
   double tolerance = 1e-6;      // converged when cost per active particle < this
   GradientMode gradient = GradientMode::Analytic;
+  // newton: Newton steps solved by linear CG (fast); cg: the paper's nonlinear
+  // CG on the total cost. Both stop when the same cost is below tolerance.
+  SolverMethod method = SolverMethod::Newton;
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
   double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)
   double contact_thickness = 0.0;  // m; 0 = automatic (half a grid spacing)
@@ -69,5 +73,6 @@ struct Scene {
 const char* to_string(ObstacleShape s);
 const char* to_string(GradientMode g);
 const char* to_string(Schedule s);
+const char* to_string(SolverMethod m);
 
 }  // namespace drape

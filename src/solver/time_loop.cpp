@@ -12,7 +12,8 @@ namespace drape {
 TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const Tiling& tiling,
                    const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec)
     : c_(cloth), m_(model), lists_(lists), red_(red), spec_(spec),
-      ev_(cloth, model, lists, tiling, policy, red), cg_(cloth, lists, tiling, red) {
+      ev_(cloth, model, lists, tiling, policy, red), cg_(cloth, lists, tiling, red),
+      newton_(cloth, cg_) {
   z_saved_.assign(cloth.z.size(), 0.0);
   free_ = red.sum_i64(lists.particles.size());
 }
@@ -158,6 +159,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   cs.tolerance = spec_.tolerance;
   cs.numeric = spec_.gradient == GradientMode::Numeric;
   cs.free_particles = free_;
+  cs.stop_requested = stop_requested;
   CgResult r;
   for (;;) {
     m_.dt = c_.dt;
@@ -168,18 +170,21 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
       continue;  // a shorter step: no CG spent on this one
     }
     stop_all_at_margin();
-    r = cg_.minimize(ev_, c_.z.data(), cs, timers, on_iteration);
+    const bool newton = spec_.method == SolverMethod::Newton && !cs.numeric;
+    r = newton ? newton_.minimize(ev_, c_.z.data(), cs, timers, on_iteration)
+               : cg_.minimize(ev_, c_.z.data(), cs, timers, on_iteration);
     st.iterations += r.iterations;
     st.evaluations += r.evaluations;
     st.cost = r.cost;
     check_finite(st);
-    if (r.converged || c_.dt <= spec_.dt_min * (1 + 1e-12) || st.retries >= 8) break;
+    if (r.converged || r.stopped || c_.dt <= spec_.dt_min * (1 + 1e-12) || st.retries >= 8) break;
     // Not converged: the step was too long for the stiff cost. Retry shorter.
     std::copy(z_saved_.begin(), z_saved_.end(), c_.z.begin());
     c_.dt = std::max(spec_.dt_min, 0.5 * c_.dt);
     ++st.retries;
   }
   st.converged = r.converged;
+  st.stopped = r.stopped;
   st.cost_per_particle = r.cost_per_particle;
   st.dt = c_.dt;
   accept(st);

@@ -7,6 +7,7 @@
 
 #include "solver/cg.hpp"
 #include "solver/cost.hpp"
+#include "solver/newton.hpp"
 #include "solver/scene.hpp"
 
 namespace drape {
@@ -20,6 +21,7 @@ struct StepStats {
   double cost_per_particle = 0;
   double max_speed = 0;   // m/s over free particles
   int64_t projections = 0;  // particles pushed back out of an obstacle
+  bool stopped = false;     // stop_requested() cut the step short
 };
 
 class TimeLoop {
@@ -29,6 +31,9 @@ class TimeLoop {
 
   // Advances one step. Throws NumericalError on NaN/Inf or divergence.
   StepStats step(Timers& timers, const std::function<void(int, double)>& on_iteration = {});
+
+  // Polled every iteration (see CgSettings::stop_requested).
+  std::function<bool()> stop_requested;
 
   Evaluator& evaluator() { return ev_; }
   Minimizer& minimizer() { return cg_; }
@@ -52,6 +57,7 @@ class TimeLoop {
   SolverSpec spec_;
   Evaluator ev_;
   Minimizer cg_;
+  NewtonSolver newton_;
   std::vector<double> z_saved_;
   int64_t free_ = 0;
 };

@@ -1,0 +1,128 @@
+#include "solver/newton.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drape {
+
+NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots) : c_(cloth), dots_(dots) {
+  const size_t n = cloth.layout.size();
+  for (auto* v : {&b_, &d_, &r_, &s_, &p_, &kp_, &diag_, &zt_}) v->assign(n, 0.0);
+}
+
+// Jacobi-preconditioned CG for K d = b (b_ holds the right-hand side).
+// Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
+int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
+                               Timers& tm) {
+  const int64_t n = c_.layout.size();
+  double *b = b_.data(), *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(),
+         *kp = kp_.data(), *diag = diag_.data();
+  {
+    ScopedPhase ph(tm, kScaling);
+    ev.stiffness_diagonal(z, diag);
+  }
+  double target, rs;
+  {
+    ScopedPhase ph(tm, kVector);
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) {
+      d[k] = 0;
+      r[k] = b[k];
+      s[k] = r[k] / diag[k];
+      p[k] = s[k];
+    }
+    target = rel_tol * rel_tol * dots_.dot(b, b);
+    rs = dots_.dot(r, s);
+  }
+  int it = 0;
+  while (it < budget) {
+    {
+      ScopedPhase g(tm, kGradient);  // one stiffness product: a gradient's worth of work
+      ev.stiffness_product(z, p, kp);
+    }
+    ScopedPhase ph(tm, kVector);
+    const double pkp = dots_.dot(p, kp);
+    if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
+    const double a = rs / pkp;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) {
+      d[k] += a * p[k];
+      r[k] -= a * kp[k];
+    }
+    ++it;
+    if (dots_.dot(r, r) <= target) break;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) s[k] = r[k] / diag[k];
+    const double rs_new = dots_.dot(r, s);
+    const double beta = rs_new / rs;
+    rs = rs_new;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) p[k] = s[k] + beta * p[k];
+  }
+  return it;
+}
+
+CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
+                                const std::function<void(int, double)>& on_iteration) {
+  const int64_t n = c_.layout.size();
+  const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
+  CgResult res;
+  {
+    ScopedPhase ph(tm, kGradient);
+    ev.hysteresis_forces(z);
+    res.cost = ev.evaluate(z, nullptr);
+  }
+  res.evaluations = 1;
+  double c0 = res.cost.total();
+  double* zt = zt_.data();
+  while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
+    if (st.stop_requested && st.stop_requested()) {
+      res.stopped = true;
+      break;
+    }
+    // Right-hand side: minus the Newton residual in F0 units, so the solution
+    // d of K d = -rho is the position step divided by F0.
+    const std::vector<double>& rho = ev.residual();
+    const ActiveList& free = ev.lists().particles;
+    std::fill(b_.begin(), b_.end(), 0.0);
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < free.size(); ++k)
+      for (int i = 0; i < 3; ++i) b_[3 * free.items[k] + i] = -rho[3 * free.items[k] + i];
+    // Inexact Newton: a loose solve far from the solution, tighter near it.
+    const double eta = std::clamp(std::sqrt(c0 * norm), 1e-3, 0.1);
+    const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
+    res.iterations += std::max(1, used);
+    // d_ solves K d = -rho (F0 units): the position step is d * F0.
+    const double scale = ev.force_scale();
+    bool accepted = false;
+    for (double a = 1.0; a > 1e-4; a *= 0.5) {
+      ScopedPhase ph(tm, kLineSearch);
+#pragma omp parallel for schedule(static)
+      for (int64_t k = 0; k < n; ++k) zt[k] = z[k] + a * scale * d_[k];
+      ev.hysteresis_forces(zt);
+      const CostTerms trial = ev.evaluate(zt, nullptr);
+      ++res.evaluations;
+      if (std::isfinite(trial.total()) && trial.total() < c0) {
+#pragma omp parallel for schedule(static)
+        for (int64_t k = 0; k < n; ++k) z[k] = zt[k];
+        res.cost = trial;
+        c0 = trial.total();
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      // Leave z's residual buffers consistent with z.
+      ev.hysteresis_forces(z);
+      res.cost = ev.evaluate(z, nullptr);
+      res.stalled = true;
+      break;
+    }
+    if (on_iteration) on_iteration(res.iterations, c0);
+  }
+  res.converged = c0 * norm < st.tolerance;
+  res.cost_per_particle = c0 * norm;
+  return res;
+}
+
+}  // namespace drape

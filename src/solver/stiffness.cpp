@@ -1,0 +1,152 @@
+// The Newton solver's kernels: element forces set to their hysteresis targets
+// and the stiffness K = dr/dx applied to a vector, matrix-free. Same passes
+// and fixed-order gathers as the cost (deterministic for any thread count).
+#include <algorithm>
+#include <cmath>
+
+#include "solver/cost.hpp"
+#include "solver/kernels.hpp"
+
+namespace drape {
+
+namespace {
+using V = V3<double>;
+inline V at(const double* z, int64_t p) { return load3<double>(z + 3 * p); }
+inline V3<Dual> at(const double* z, const double* v, int64_t p) { return load3(z + 3 * p, v + 3 * p); }
+inline void put(double* out, const V& v) {
+  out[0] = v.x;
+  out[1] = v.y;
+  out[2] = v.z;
+}
+inline V value_of(const V3<Dual>& a) { return {a.x.v, a.y.v, a.z.v}; }
+inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
+}  // namespace
+
+void Evaluator::hysteresis_forces(double* z) {
+  const Layout& L = c_.layout;
+  const int64_t fo = L.tension();  // f1 is indexed from the tension block
+  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V g[2];
+    const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
+    z[L.tension() + s] = m_.stretch[d].stop(c_.f1[s], len / c_.edge_rest[s] - 1).f;
+  });
+  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V g[3];
+    const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]),
+                                 load3<double>(&c_.bend_axis[3 * s]), g);
+    z[L.moment() + s] = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th / c_.triple_rest[s]).f;
+  });
+  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+    V g[3];
+    const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
+    z[L.shear() + s] = m_.shear.stop(c_.f1[L.shear() - fo + s], phi).f;
+  });
+}
+
+void Evaluator::stiffness_product(const double* z, const double* v, double* kv) {
+  const Layout& L = c_.layout;
+  const int64_t fo = L.tension();
+  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V3<Dual> g[2];
+    const Dual len = edge_length(at(z, v, p), at(z, v, c_.next[d][p]), g);
+    const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
+    const Band::Stop st = m_.stretch[d].stop(c_.f1[s], len.v / L0 - 1);
+    const double tension = std::max(0.0, st.f), stiff = st.df_dq / L0 * len.d;
+    for (int k = 0; k < 2; ++k)
+      put(&buf_e_[6 * s + 3 * k], w * (tension * deriv_of(g[k]) + stiff * value_of(g[k])));
+  });
+  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V3<Dual> g[3];
+    const Dual th = bend_angle(at(z, v, c_.prev[d][p]), at(z, v, p), at(z, v, c_.next[d][p]),
+                               load3<Dual>(&c_.bend_axis[3 * s]), g);
+    const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
+    const double slope = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th.v / Lm).df_dq;
+    const double stiff = w * slope / Lm * th.d;
+    for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * value_of(g[k]));
+  });
+  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+    V3<Dual> g[3];
+    const Dual phi = shear_angle(at(z, v, s), at(z, v, c_.next[0][s]), at(z, v, c_.next[1][s]), g);
+    const double slope = m_.shear.stop(c_.f1[L.shear() - fo + s], phi.v).df_dq;
+    const double stiff = c_.shear_area[s] * slope * phi.d;
+    for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], stiff * value_of(g[k]));
+  });
+  const int64_t nz = L.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < nz; ++k) kv[k] = 0.0;
+  const double ca = m_.accel_coeff();
+  for_each_item(lists_.particles, pol_, [&](int64_t p) {
+    double fc[3], slope = 0;
+    const bool touching = contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
+    const double* vp = v + 3 * p;
+    double out[3];
+    for (int k = 0; k < 3; ++k) out[k] = c_.mass[p] * ca * vp[k];
+    if (touching) {  // slope * n (n.v); n from the force direction
+      const double fn = std::sqrt(fc[0] * fc[0] + fc[1] * fc[1] + fc[2] * fc[2]);
+      if (fn > 0) {
+        const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
+        for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
+      }
+    }
+    gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) {
+      out[0] += c[0];
+      out[1] += c[1];
+      out[2] += c[2];
+    });
+    for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
+  });
+}
+
+void Evaluator::stiffness_diagonal(const double* z, double* diag) {
+  const Layout& L = c_.layout;
+  const int64_t fo = L.tension();
+  const int64_t nz = L.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < nz; ++k) diag[k] = 1.0;
+  // Per element and particle: the diagonal of its stiffness block, in the
+  // first entry of the particle's buffer slot, gathered below.
+  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V g[2];
+    const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
+    const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
+    const Band::Stop st = m_.stretch[d].stop(c_.f1[s], len / L0 - 1);
+    for (int k = 0; k < 2; ++k)
+      buf_e_[6 * s + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
+  });
+  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V g[3];
+    const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]),
+                                 load3<double>(&c_.bend_axis[3 * s]), g);
+    const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
+    const double slope = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th / Lm).df_dq;
+    for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
+  });
+  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+    V g[3];
+    const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
+    const double slope = m_.shear.stop(c_.f1[L.shear() - fo + s], phi).df_dq;
+    for (int k = 0; k < 3; ++k) buf_s_[9 * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
+  });
+  const double ca = m_.accel_coeff();
+  for_each_item(lists_.particles, pol_, [&](int64_t p) {
+    double fc[3], slope = 0;
+    contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
+    double dsum = c_.mass[p] * ca + slope / 3;
+    gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
+    for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
+  });
+}
+
+}  // namespace drape
