@@ -60,6 +60,18 @@ void BM_Gradient(benchmark::State& state) {
 }
 BENCHMARK(BM_Gradient)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The Newton solver's inner iteration: one stiffness product K v.
+void BM_StiffnessProduct(benchmark::State& state) {
+  static Bed bed(int(state.range(0)));
+  std::vector<double> v(bed.cloth.z.size(), 1e-6), kv(bed.cloth.z.size());
+  bed.loop->evaluator().hysteresis_forces(bed.cloth.z.data());
+  for (auto _ : state) {
+    bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
+    benchmark::DoNotOptimize(kv.data());
+  }
+}
+BENCHMARK(BM_StiffnessProduct)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_CgIteration(benchmark::State& state) {
   static Bed bed(int(state.range(0)));
   const int per = 10;

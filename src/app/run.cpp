@@ -197,6 +197,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                 (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
 
   Progress progress(talk, scene.solver.steps, scene.solver.wall_limit);
+  Summary sum;
   // The budget is checked every iteration, on rank 0's clock, so that every
   // rank stops at the same iteration.
   auto over_budget = [&] {
@@ -207,8 +208,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     return over != 0;
   };
   loop.stop_requested = over_budget;
-  Summary sum;
-  int calm = 0;
+  int calm = 0, last_frame = 0;  // frame 0 is written above
   for (int s = 0; s < scene.solver.steps; ++s) {
     const StepStats st = loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
     sum.steps = st.step;
@@ -227,6 +227,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     if (!last && !sum.at_rest && scene.output.every > 0 && st.step % scene.output.every == 0) {
       ScopedPhase ph(tm, kOutput);
       h5->write_frame(frame_of(cloth, blocks));
+      last_frame = st.step;
     }
     if (sum.at_rest) break;
     if ((st.stopped || over_budget()) && !last) {
@@ -241,7 +242,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   const Checksum ck = state_checksum(cloth, tiling, owned, red);
   {
     ScopedPhase ph(tm, kOutput);
-    h5->write_frame(frame_of(cloth, blocks));  // the final state, always
+    if (cloth.step != last_frame) h5->write_frame(frame_of(cloth, blocks));  // the final state
     h5->finish();
     if (rank == 0 && scene.output.picture)
       render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png");

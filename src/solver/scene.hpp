@@ -45,7 +45,8 @@ struct SolverSpec {
   double contact_thickness = 0.0;  // m; 0 = automatic (half a grid spacing)
   // Weight of the memory term 1/2 mu |(f - f_history) lambda / F0|^2: inside a
   // KES band a force costs nothing, so without it the minimum is not unique;
-  // with it the force keeps its history value unless the cloth moves it.
+  // with it each force is pulled to its hysteresis target (Band::stop): the
+  // history force while inside the band, the band edge once pushed past it.
   double memory = 1.0;
   double wall_limit = 540.0;    // s of stepping at most (0: none); the run then ends cleanly
 };

@@ -1,0 +1,116 @@
+// The paper's Table 2 and Fig. 8 on the machine at hand: a fixed number of
+// CG iterations (the paper's method) on a 1000 x 1000 cloth mid-drape, for
+// each schedule at 1..N threads, all in one process so the ratios come from
+// one run. Prints a table and writes JSON (run/scaling draws the plot).
+//   scaling [--size 1000] [--iterations 100] [--threads N] [--out scaling.json]
+#include <omp.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <string>
+
+#include "amrc/active_lists.hpp"
+#include "io/json.hpp"
+#include "io/kes.hpp"
+#include "solver/time_loop.hpp"
+
+namespace drape {
+namespace {
+
+struct Row {
+  std::string schedule;
+  int threads;
+  double seconds, speedup, karp_flatt, parallel_overhead, gradient;
+};
+
+double run_once(int n, int iterations, Schedule sc, int threads, double* gradient_seconds) {
+  Scene scene;
+  scene.cloth.particles = {n, n};
+  scene.parallel.schedule = sc;
+  const Fabric fabric = load_fabric("denim-A");
+  omp_set_num_threads(threads);
+  Cloth cloth = make_cloth(scene, fabric);
+  Model model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
+  Tiling tiling(n, n, scene.cloth.tile);
+  std::vector<int> owned;
+  for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
+  ActiveLists lists;
+  build_active_lists(cloth, tiling, owned, lists);
+  LocalReducer red;
+  LoopPolicy policy{sc, scene.parallel.chunk};
+  TimeLoop loop(cloth, model, lists, tiling, policy, red, scene.solver);
+  // The same mid-drape state for every run: jittered positions, loaded forces.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Layout& L = cloth.layout;
+  for (int64_t k = 0; k < L.tension(); ++k) cloth.z[k] += 0.1 * cloth.grid.hi * u(rng);
+  for (int64_t k = L.tension(); k < L.moment(); ++k) cloth.z[k] = 5.0 * (1 + u(rng));
+  loop.freeze_bend_axes();
+  CgSettings cs;
+  cs.max_iterations = iterations;
+  cs.tolerance = 0;
+  cs.free_particles = loop.free_particles();
+  Timers tm;
+  const auto t0 = std::chrono::steady_clock::now();
+  loop.minimizer().minimize(loop.evaluator(), cloth.z.data(), cs, tm);
+  *gradient_seconds = tm.seconds[kGradient] + tm.seconds[kLineSearch];
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+}  // namespace drape
+
+int main(int argc, char** argv) {
+  using namespace drape;
+  int n = 1000, iterations = 100, max_threads = omp_get_num_procs();
+  std::string out = "scaling.json";
+  for (int a = 1; a + 1 < argc; a += 2) {
+    if (!std::strcmp(argv[a], "--size")) n = std::atoi(argv[a + 1]);
+    else if (!std::strcmp(argv[a], "--iterations")) iterations = std::atoi(argv[a + 1]);
+    else if (!std::strcmp(argv[a], "--threads")) max_threads = std::atoi(argv[a + 1]);
+    else if (!std::strcmp(argv[a], "--out")) out = argv[a + 1];
+  }
+  std::vector<Row> rows;
+  std::printf("%-13s %7s %10s %8s %10s %12s %10s\n", "schedule", "threads", "time [s]", "speed-up",
+              "seq. frac", "par. ovh [s]", "grad [s]");
+  for (Schedule sc : {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided}) {
+    double t1 = 0;
+    for (int p = 1; p <= max_threads; ++p) {
+      double grad = 0;
+      const double t = run_once(n, iterations, sc, p, &grad);
+      if (p == 1) t1 = t;
+      const double s = t1 / t;
+      // Karp-Flatt: the serial fraction implied by the measured speed-up.
+      const double e = p > 1 ? (1 / s - 1.0 / p) / (1 - 1.0 / p) : 0.0;
+      const double ovh = t - t1 / p;  // time beyond perfect division
+      rows.push_back({to_string(sc), p, t, s, e, ovh, grad});
+      std::printf("%-13s %7d %10.3f %8.2f %10.3f %12.3f %10.3f\n", to_string(sc), p, t, s, e, ovh, grad);
+      std::fflush(stdout);
+    }
+  }
+  Json j;
+  j.begin_object();
+  j.value("particles", (long long)n * n);
+  j.value("iterations", iterations);
+  j.value("method", "cg");
+  j.begin_array("rows");
+  for (const Row& r : rows)
+    j.begin_object()
+        .value("schedule", r.schedule)
+        .value("threads", r.threads)
+        .value("seconds", r.seconds)
+        .value("speedup", r.speedup)
+        .value("serial_fraction", r.karp_flatt)
+        .value("parallel_overhead_seconds", r.parallel_overhead)
+        .value("gradient_seconds", r.gradient)
+        .end_object();
+  j.end_array();
+  j.end_object();
+  std::ofstream(out) << j.str() << "\n";
+  return 0;
+}
