@@ -38,14 +38,14 @@ class Band {
     double f;     // target force
     double df_dq; // its slope (0 inside the band)
   };
-  Stop stop(double f1, double q) const {
-    const BandValue v = at(q);
+  Stop stop(double f1, double q) const { return stop(f1, at(q)); }
+  static Stop stop(double f1, const BandValue& v) {
     if (f1 > v.hi) return {v.hi, v.dhi};
     if (f1 < v.lo) return {v.lo, v.dlo};
     return {f1, 0.0};
   }
-  BandExcess excess(double f, double q) const {
-    const BandValue v = at(q);
+  BandExcess excess(double f, double q) const { return excess(f, at(q)); }
+  static BandExcess excess(double f, const BandValue& v) {
     if (f > v.hi) return {f - v.hi, -v.dhi};
     if (f < v.lo) return {f - v.lo, -v.dlo};
     return {};

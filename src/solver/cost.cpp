@@ -51,9 +51,9 @@ void Evaluator::edge_forces(int64_t s, const double* z) {
   const double f = z[c_.layout.tension() + s];
   put(&buf_e_[6 * s], g[0], f * w);
   put(&buf_e_[6 * s + 3], g[1], f * w);
-  const double eps = L / L0 - 1.0;
-  const BandExcess ex = m_.use_stretch ? m_.stretch[d].excess(f, eps) : BandExcess{};
-  const Band::Stop st = m_.stretch[d].stop(c_.f1[s], eps);
+  const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
+  const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
+  const Band::Stop st = Band::stop(c_.f1[s], bv);
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_e_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -70,9 +70,9 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const double f = z[c_.layout.moment() + s];
   for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], g[k], f * w);
-  const double q = th / Lm;
-  const BandExcess ex = m_.use_bend ? m_.bend[d].excess(f, q) : BandExcess{};
-  const Band::Stop st = m_.bend[d].stop(c_.f1[c_.layout.moment() - c_.layout.tension() + s], q);
+  const BandValue bv = m_.bend[d].at(th / Lm);
+  const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
+  const Band::Stop st = Band::stop(c_.f1[c_.layout.moment() - c_.layout.tension() + s], bv);
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_t_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -86,8 +86,9 @@ void Evaluator::shear_forces(int64_t s, const double* z) {
   const double A = c_.shear_area[s];
   const double f = z[c_.layout.shear() + s];
   for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], g[k], f * A);
-  const BandExcess ex = m_.use_shear ? m_.shear.excess(f, phi) : BandExcess{};
-  const Band::Stop st = m_.shear.stop(c_.f1[c_.layout.shear() - c_.layout.tension() + s], phi);
+  const BandValue bv = m_.shear.at(phi);
+  const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
+  const Band::Stop st = Band::stop(c_.f1[c_.layout.shear() - c_.layout.tension() + s], bv);
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
