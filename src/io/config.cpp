@@ -46,6 +46,7 @@ const KeySpec kKeys[] = {
     {"cloth", "fabric", Kind::String},
     {"cloth", "tile", Kind::Int},
     {"cloth", "shear", Kind::Bool},
+    {"cloth", "clamp", Kind::Int},
     {"cloth", "height", Kind::Float},
     {"cloth", "center", Kind::Float2},
     {"obstacle", "shape", Kind::String},
@@ -449,6 +450,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("cloth.fabric", s.cloth.fabric);
   r.get("cloth.tile", s.cloth.tile);
   r.get("cloth.shear", s.cloth.shear);
+  r.get("cloth.clamp", s.cloth.clamp);
   r.get("cloth.height", s.cloth.height);
   r.get("cloth.center", s.cloth.center);
   r.get_enum("obstacle.shape", s.obstacle.shape,
@@ -512,6 +514,8 @@ void validate(const Config& cfg, const Scene& s) {
   check(all_positive(c.size), "cloth.size", "sizes must be > 0, got " + format_array(c.size));
   check(!c.fabric.empty(), "cloth.fabric", "must not be empty");
   check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));
+  check(c.clamp >= 0 && c.clamp < c.particles[0], "cloth.clamp",
+        "must be in [0, NI), got " + std::to_string(c.clamp));
   check(!s.obstacle.floor || c.height >= 0, "cloth.height",
         "must be >= 0 (the cloth starts above the floor; obstacle.floor = true)" + got(c.height));
 
@@ -582,6 +586,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "fabric", quote(c.fabric), "name in data/kes/ or a path");
   line(os, "tile", std::to_string(c.tile), "particles per tile side");
   line(os, "shear", b(c.shear), "KES shear band");
+  line(os, "clamp", std::to_string(c.clamp), "rows i < clamp held fixed (a platform); 0: none");
   line(os, "height", format_double(c.height), "m, z of the flat cloth at t = 0");
   line(os, "center", format_array(c.center), "m, x-y of the cloth centre");
   const auto& o = s.obstacle;

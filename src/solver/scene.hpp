@@ -19,6 +19,7 @@ struct ClothSpec {
   bool shear = true;                         // KES shear band on/off
   double height = 0.45;                      // m, z of the flat cloth at t = 0
   std::array<double, 2> center{0.0, 0.0};    // m, x-y of the cloth centre
+  int clamp = 0;                             // rows i < clamp held fixed (a platform)
 };
 
 struct ObstacleSpec {

@@ -89,6 +89,10 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
       // Released from rest under gravity: x(-dt) = x(0) + g dt^2 / 2 makes the
       // three-point acceleration exact for a free fall.
       c.x2[3 * p + 2] += 0.5 * gz * dt * dt;
+      if (i < scene.cloth.clamp) {  // on the platform: held, at rest
+        c.flags[p] |= kFixed;
+        c.x2[3 * p + 2] = c.x1[3 * p + 2];
+      }
     }
   c.dt = c.dt_prev = dt;
   rebuild_topology(c, scene.cloth.shear);
