@@ -68,6 +68,25 @@ void write_text_atomically(const std::string& path, const std::string& text) {
   fs::rename(tmp, path);
 }
 
+// The paper's Table 2 columns for this run's time stepping: the time outside
+// the parallel loops (sequential overhead), the time inside them beyond the
+// busy thread time divided by the threads (parallel overhead: imbalance and
+// synchronisation), and the speed-up this implies over one thread running
+// the same busy work plus the sequential part.
+struct Table2 {
+  double time = 0, sequential = 0, parallel = 0, speedup = 1;
+};
+
+Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) {
+  Table2 t;
+  const double wall = b.wall - a.wall, busy = b.busy - a.busy;
+  t.time = time;
+  t.sequential = std::max(0.0, time - wall);
+  t.parallel = std::max(0.0, wall - busy / threads);
+  t.speedup = time > 0 ? (busy + t.sequential) / time : 1.0;
+  return t;
+}
+
 struct Summary {
   int steps = 0;
   long long iterations = 0, evaluations = 0, projections = 0;
@@ -75,6 +94,7 @@ struct Summary {
   double dt_min = 1e300, dt_max = 0;
   bool at_rest = false;
   bool stopped_by_wall_limit = false;
+  Table2 table2;
   StepStats last;
 };
 
@@ -125,6 +145,12 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.begin_object("phases");
   for (int p = 0; p < kPhases; ++p) j.value(phase_name(p), tm.seconds[p]);
   j.end_object();
+  j.begin_object("table2")
+      .value("time", s.table2.time)
+      .value("sequential_overhead", s.table2.sequential)
+      .value("parallel_overhead", s.table2.parallel)
+      .value("speedup", s.table2.speedup)
+      .end_object();
   j.value("ranks", ranks);
   j.value("threads", threads);
   j.value("schedule", to_string(scene.parallel.schedule));
@@ -132,6 +158,12 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("state_checksum", checksum);
   j.end_object();
   return j.str();
+}
+
+void print_table2(const Table2& t, int threads) {
+  std::printf("\nTable 2 (time stepping, %d thread(s)): time %.3f s, sequential overhead %.3f s, "
+              "parallel overhead %.3f s, speed-up %.2f\n",
+              threads, t.time, t.sequential, t.parallel, t.speedup);
 }
 
 void print_timing_table(const Timers& tm, double wall, const std::string& checksum) {
@@ -211,6 +243,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   };
   loop.stop_requested = over_budget;
   int calm = 0, last_frame = 0;  // frame 0 is written above
+  const LoopClock clock0 = loop_clock();
+  const auto stepping0 = std::chrono::steady_clock::now();
   for (int s = 0; s < scene.solver.steps; ++s) {
     const StepStats st = loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
     sum.steps = st.step;
@@ -240,6 +274,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
   }
   if (scene.solver.rest_speed <= 0) sum.at_rest = sum.last.max_speed < 1e-3;
+  sum.table2 = table2(clock0, loop_clock(),
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - stepping0).count(),
+                      threads);
   const double depth = max_penetration(cloth, model, lists, red);
   const Checksum ck = state_checksum(cloth, tiling, owned, red);
   {
@@ -257,6 +294,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     if (!opt.quiet) {
       progress.finish(sum.at_rest, depth);
       print_timing_table(tm, wall, ck.hex());
+      print_table2(sum.table2, threads);
     }
   }
   return 0;

@@ -21,18 +21,20 @@ double Minimizer::dot(const double* a, const double* b) {
   // Blocks of z: (offset, unknowns per particle).
   const int64_t off[4] = {L.x(), L.tension(), L.moment(), L.shear()};
   const int per[4] = {3, 2, 2, 1};
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int t = 0; t < nt; ++t) {
-    const TileRange r = tiling_.range(lists_.tiles[t]);
-    double s = 0;
-    for (int blk = 0; blk < 4; ++blk)
-      for (int i = r.i0; i < r.i1; ++i) {
-        const int64_t lo = off[blk] + per[blk] * (int64_t(i) * nj + r.j0);
-        const int64_t hi = off[blk] + per[blk] * (int64_t(i) * nj + r.j1);
-        for (int64_t k = lo; k < hi; ++k) s += a[k] * b[k];
-      }
-    partials_[t] = s;
-  }
+  timed_region([&] {
+#pragma omp for schedule(dynamic, 1) nowait
+    for (int t = 0; t < nt; ++t) {
+      const TileRange r = tiling_.range(lists_.tiles[t]);
+      double s = 0;
+      for (int blk = 0; blk < 4; ++blk)
+        for (int i = r.i0; i < r.i1; ++i) {
+          const int64_t lo = off[blk] + per[blk] * (int64_t(i) * nj + r.j0);
+          const int64_t hi = off[blk] + per[blk] * (int64_t(i) * nj + r.j1);
+          for (int64_t k = lo; k < hi; ++k) s += a[k] * b[k];
+        }
+      partials_[t] = s;
+    }
+  });
   double out = 0;
   red_.sum_tiles(lists_.tiles, partials_.data(), 1, &out);
   return out;
@@ -71,11 +73,10 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
   double gs;
   {
     ScopedPhase ph(tm, kVector);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) {
+    parallel_for(n, [&](int64_t k) {
       s[k] = g[k] / diag[k];
       d[k] = -s[k];
-    }
+    });
     gs = dot(g, s);
   }
   int since_restart = 0;
@@ -91,8 +92,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     }
     double gd = dot(g, d);
     if (!(gd < 0)) {  // not a descent direction: restart
-#pragma omp parallel for schedule(static)
-      for (int64_t k = 0; k < n; ++k) d[k] = -s[k];
+      parallel_for(n, [&](int64_t k) { d[k] = -s[k]; });
       gd = -gs;
       steepest = true;
     }
@@ -107,8 +107,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     for (int tries = 0; tries < 30; ++tries) {
       {
         ScopedPhase ph(tm, kVector);
-#pragma omp parallel for schedule(static)
-        for (int64_t k = 0; k < n; ++k) zt[k] = z[k] + a * d[k];
+        parallel_for(n, [&](int64_t k) { zt[k] = z[k] + a * d[k]; });
       }
       CostTerms trial;
       {
@@ -133,8 +132,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
         break;
       }
       // Retry along steepest descent once.
-#pragma omp parallel for schedule(static)
-      for (int64_t k = 0; k < n; ++k) d[k] = -s[k];
+      parallel_for(n, [&](int64_t k) { d[k] = -s[k]; });
       steepest = true;
       alpha_ = 1.0;
       continue;
@@ -145,13 +143,11 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     const double sec = (dn - gd) > 0 ? a * (-gd) / (dn - gd) : 4.0 * a;
     alpha_ = std::clamp(sec, 0.1 * a, 10.0 * a);
     // Copy rather than swap: z is the caller's array and stays current.
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) z[k] = zt[k];
+    parallel_for(n, [&](int64_t k) { z[k] = zt[k]; });
     std::swap(g, gn);
     const double gs_old = gs;
     const double g_sold = dot(g, s);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) s[k] = g[k] / diag[k];
+    parallel_for(n, [&](int64_t k) { s[k] = g[k] / diag[k]; });
     gs = dot(g, s);
     double beta = std::max(0.0, (gs - g_sold) / gs_old);
     if (++since_restart >= st.restart_every) {
@@ -159,8 +155,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
       since_restart = 0;
     }
     steepest = beta == 0;
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) d[k] = -s[k] + beta * d[k];
+    parallel_for(n, [&](int64_t k) { d[k] = -s[k] + beta * d[k]; });
     c0 = ct;
     ++res.iterations;
     if (on_iteration) on_iteration(res.iterations, c0);

@@ -238,8 +238,7 @@ CostTerms Evaluator::evaluate(const double* z, double* grad) {
   const CostTerms cost = reduce_costs();
   if (!grad) return cost;
   const int64_t nz = c_.layout.size();
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < nz; ++k) grad[k] = 0.0;
+  parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });
   for_each_item(lists_.edges, pol_, [&](int64_t s) { edge_gradient(s, z, grad); });
   for_each_item(lists_.triples, pol_, [&](int64_t s) { triple_gradient(s, z, grad); });
   for_each_item(lists_.shears, pol_, [&](int64_t s) { shear_gradient(s, z, grad); });
@@ -252,8 +251,7 @@ CostTerms Evaluator::evaluate(const double* z, double* grad) {
 void Evaluator::scaling_diagonal(const double* z, double* diag) {
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   const int64_t nz = c_.layout.size();
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < nz; ++k) diag[k] = 1.0;
+  parallel_for(nz, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
   // band stiffness (lambda * slope * dq/dx)^2, written to the first entry of
   // the particle's buffer slot; the element force's own diagonal directly.
@@ -327,9 +325,9 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   });
   // An unknown nothing depends on has a zero gradient too: any scale will do.
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < nz; ++k)
+  parallel_for(nz, [&](int64_t k) {
     if (!(diag[k] > 0)) diag[k] = 1.0;
+  });
 }
 
 // ---- numeric gradient (reference mode) ------------------------------------

@@ -4,12 +4,52 @@
 // alternatives hand out whole tiles with OpenMP's static, dynamic or guided
 // schedule (paper Fig. 8). Kernels write per-slot results only, so every
 // schedule gives bitwise the same numbers.
+#include <omp.h>
+
 #include <cstdint>
 
 #include "amrc/active_lists.hpp"
 #include "solver/scene.hpp"
 
 namespace drape {
+
+// Where the time of the parallel loops goes, for the paper's Table 2: the
+// wall time spent inside them and the thread-seconds their bodies kept
+// threads busy. The rest of a step is sequential. Process-wide; only the
+// master thread touches it (between loops).
+struct LoopClock {
+  double wall = 0, busy = 0;
+};
+inline LoopClock& loop_clock() {
+  static LoopClock c;
+  return c;
+}
+
+// Runs body() inside one parallel region and books its time on loop_clock().
+// body must contain the work-sharing loop (with nowait).
+template <class Body>
+void timed_region(Body&& body) {
+  const double t0 = omp_get_wtime();
+  double busy = 0;
+#pragma omp parallel reduction(+ : busy)
+  {
+    const double b0 = omp_get_wtime();
+    body();
+    busy += omp_get_wtime() - b0;
+  }
+  LoopClock& c = loop_clock();
+  c.wall += omp_get_wtime() - t0;
+  c.busy += busy;
+}
+
+// Element-wise loop over [0, n) in equal static chunks.
+template <class F>
+void parallel_for(int64_t n, F&& f) {
+  timed_region([&] {
+#pragma omp for schedule(static) nowait
+    for (int64_t k = 0; k < n; ++k) f(k);
+  });
+}
 
 struct LoopPolicy {
   Schedule schedule = Schedule::ActiveLists;
@@ -22,27 +62,31 @@ void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
   const int nt = int(list.tile_begin.size()) - 1;
   const int64_t* items = list.items.data();
   const int64_t* tb = list.tile_begin.data();
-  switch (pol.schedule) {
-    case Schedule::ActiveLists:
-#pragma omp parallel for schedule(static)
-      for (int64_t k = 0; k < n; ++k) f(items[k]);
-      break;
-    case Schedule::Static:
-#pragma omp parallel for schedule(static)
-      for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
-      break;
-    case Schedule::Dynamic:
-#pragma omp parallel for schedule(dynamic, pol.chunk)
-      for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
-      break;
-    case Schedule::Guided:
-#pragma omp parallel for schedule(guided)
-      for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
-      break;
-  }
+  const Schedule sc = pol.schedule;
+  const int chunk = pol.chunk;
+  timed_region([&] {
+    switch (sc) {
+      case Schedule::ActiveLists:
+#pragma omp for schedule(static) nowait
+        for (int64_t k = 0; k < n; ++k) f(items[k]);
+        break;
+      case Schedule::Static:
+#pragma omp for schedule(static) nowait
+        for (int t = 0; t < nt; ++t)
+          for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+        break;
+      case Schedule::Dynamic:
+#pragma omp for schedule(dynamic, chunk) nowait
+        for (int t = 0; t < nt; ++t)
+          for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+        break;
+      case Schedule::Guided:
+#pragma omp for schedule(guided) nowait
+        for (int t = 0; t < nt; ++t)
+          for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+        break;
+    }
+  });
 }
 
 // Per-tile sums of value(item) over each tile's run, in list order: the
@@ -50,12 +94,14 @@ void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
 template <class F>
 void tile_sums(const ActiveList& list, F&& value, double* out) {
   const int nt = int(list.tile_begin.size()) - 1;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int t = 0; t < nt; ++t) {
-    double s = 0;
-    for (int64_t k = list.tile_begin[t]; k < list.tile_begin[t + 1]; ++k) s += value(list.items[k]);
-    out[t] = s;
-  }
+  timed_region([&] {
+#pragma omp for schedule(dynamic, 1) nowait
+    for (int t = 0; t < nt; ++t) {
+      double s = 0;
+      for (int64_t k = list.tile_begin[t]; k < list.tile_begin[t + 1]; ++k) s += value(list.items[k]);
+      out[t] = s;
+    }
+  });
 }
 
 }  // namespace drape

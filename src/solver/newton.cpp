@@ -24,13 +24,12 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) {
+    parallel_for(n, [&](int64_t k) {
       d[k] = 0;
       r[k] = b[k];
       s[k] = r[k] / diag[k];
       p[k] = s[k];
-    }
+    });
     target = rel_tol * rel_tol * dots_.dot(b, b);
     rs = dots_.dot(r, s);
   }
@@ -44,20 +43,17 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     const double pkp = dots_.dot(p, kp);
     if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
     const double a = rs / pkp;
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) {
+    parallel_for(n, [&](int64_t k) {
       d[k] += a * p[k];
       r[k] -= a * kp[k];
-    }
+    });
     ++it;
     if (dots_.dot(r, r) <= target) break;
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) s[k] = r[k] / diag[k];
+    parallel_for(n, [&](int64_t k) { s[k] = r[k] / diag[k]; });
     const double rs_new = dots_.dot(r, s);
     const double beta = rs_new / rs;
     rs = rs_new;
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) p[k] = s[k] + beta * p[k];
+    parallel_for(n, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
   }
   return it;
 }
@@ -85,9 +81,9 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     const std::vector<double>& rho = ev.residual();
     const ActiveList& free = ev.lists().particles;
     std::fill(b_.begin(), b_.end(), 0.0);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < free.size(); ++k)
+    parallel_for(free.size(), [&](int64_t k) {
       for (int i = 0; i < 3; ++i) b_[3 * free.items[k] + i] = -rho[3 * free.items[k] + i];
+    });
     // Inexact Newton: a loose solve far from the solution, tighter near it.
     const double eta = std::clamp(std::sqrt(c0 * norm), 1e-3, 0.1);
     const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
@@ -97,14 +93,12 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     bool accepted = false;
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
-#pragma omp parallel for schedule(static)
-      for (int64_t k = 0; k < n; ++k) zt[k] = z[k] + a * scale * d_[k];
+      parallel_for(n, [&](int64_t k) { zt[k] = z[k] + a * scale * d_[k]; });
       ev.hysteresis_forces(zt);
       const CostTerms trial = ev.evaluate(zt, nullptr);
       ++res.evaluations;
       if (std::isfinite(trial.total()) && trial.total() < c0) {
-#pragma omp parallel for schedule(static)
-        for (int64_t k = 0; k < n; ++k) z[k] = zt[k];
+        parallel_for(n, [&](int64_t k) { z[k] = zt[k]; });
         res.cost = trial;
         c0 = trial.total();
         accepted = true;
