@@ -2,9 +2,13 @@
 // CG iterations (the paper's method) on a 1000 x 1000 cloth mid-drape, for
 // each schedule at 1..N threads, all in one process so the ratios come from
 // one run. Prints a table and writes JSON (run/scaling draws the plot).
-//   scaling [--size 1000] [--iterations 100] [--threads N] [--out scaling.json]
+//   scaling [--size 1000] [--iterations 100] [--threads N] [--repeat R] [--out scaling.json]
+// With R > 1 every configuration is timed R times, interleaved (round after
+// round over all of them, so drift on a shared machine hits all alike), and
+// the median is reported.
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -67,30 +71,47 @@ double run_once(int n, int iterations, Schedule sc, int threads, double* gradien
 
 int main(int argc, char** argv) {
   using namespace drape;
-  int n = 1000, iterations = 100, max_threads = omp_get_num_procs();
+  int n = 1000, iterations = 100, max_threads = omp_get_num_procs(), repeat = 1;
   std::string out = "scaling.json";
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--size")) n = std::atoi(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--iterations")) iterations = std::atoi(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--threads")) max_threads = std::atoi(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--out")) out = argv[a + 1];
+    else if (!std::strcmp(argv[a], "--repeat")) repeat = std::max(1, std::atoi(argv[a + 1]));
   }
+  const Schedule schedules[] = {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided};
+  // times[schedule][threads-1] over the rounds
+  std::vector<std::vector<std::vector<double>>> times(4, std::vector<std::vector<double>>(max_threads));
+  std::vector<std::vector<std::vector<double>>> grads = times;
+  for (int r = 0; r < repeat; ++r)
+    for (int si = 0; si < 4; ++si)
+      for (int p = 1; p <= max_threads; ++p) {
+        double grad = 0;
+        times[si][p - 1].push_back(run_once(n, iterations, schedules[si], p, &grad));
+        grads[si][p - 1].push_back(grad);
+        std::fprintf(stderr, "round %d/%d %s %d thread(s): %.3f s\n", r + 1, repeat,
+                     to_string(schedules[si]), p, times[si][p - 1].back());
+      }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+  };
   std::vector<Row> rows;
   std::printf("%-13s %7s %10s %8s %10s %12s %10s\n", "schedule", "threads", "time [s]", "speed-up",
               "seq. frac", "par. ovh [s]", "grad [s]");
-  for (Schedule sc : {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided}) {
-    double t1 = 0;
+  for (int si = 0; si < 4; ++si) {
+    const double t1 = median(times[si][0]);
     for (int p = 1; p <= max_threads; ++p) {
-      double grad = 0;
-      const double t = run_once(n, iterations, sc, p, &grad);
-      if (p == 1) t1 = t;
-      const double s = t1 / t;
+      const double t = median(times[si][p - 1]), grad = median(grads[si][p - 1]);
+      const double sp = t1 / t;
       // Karp-Flatt: the serial fraction implied by the measured speed-up.
-      const double e = p > 1 ? (1 / s - 1.0 / p) / (1 - 1.0 / p) : 0.0;
+      const double e = p > 1 ? (1 / sp - 1.0 / p) / (1 - 1.0 / p) : 0.0;
       const double ovh = t - t1 / p;  // time beyond perfect division
-      rows.push_back({to_string(sc), p, t, s, e, ovh, grad});
-      std::printf("%-13s %7d %10.3f %8.2f %10.3f %12.3f %10.3f\n", to_string(sc), p, t, s, e, ovh, grad);
-      std::fflush(stdout);
+      rows.push_back({to_string(schedules[si]), p, t, sp, e, ovh, grad});
+      std::printf("%-13s %7d %10.3f %8.2f %10.3f %12.3f %10.3f\n", to_string(schedules[si]), p, t, sp,
+                  e, ovh, grad);
     }
   }
   Json j;
@@ -98,6 +119,7 @@ int main(int argc, char** argv) {
   j.value("particles", (long long)n * n);
   j.value("iterations", iterations);
   j.value("method", "cg");
+  j.value("repeat", repeat);
   j.begin_array("rows");
   for (const Row& r : rows)
     j.begin_object()
