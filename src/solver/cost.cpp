@@ -163,7 +163,7 @@ void Evaluator::triple_gradient(int64_t s, const double* z, double* grad) {
   }
   const V3<Dual> n = load3<Dual>(&c_.bend_axis[3 * s]);
   V3<Dual> gd[3];
-  bend_angle(xd[0], xd[1], xd[2], n, gd);
+  drape::bend_gradient(xd[0], xd[1], xd[2], n, gd);
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
   const double fw = f * w / m_.force_scale, gq = gq_t_[s];
   double gr = 0;
@@ -185,7 +185,7 @@ void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
     xd[k] = load3(z + 3 * ids[k], rv);
   }
   V3<Dual> gd[3];
-  shear_angle(xd[0], xd[1], xd[2], gd);
+  drape::shear_gradient(xd[0], xd[1], xd[2], gd);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
   const double fa = f * A / m_.force_scale, gq = gq_s_[s];
   double gr = 0;

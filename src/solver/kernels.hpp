@@ -48,31 +48,43 @@ inline T edge_length(const V3<T>& a, const V3<T>& b, V3<T> g[2]) {
 // Triple a-b-c: signed turning angle at b about the frozen axis n (unit):
 // theta = atan2((e1 x e2).n, e1.e2). Only bending out of the cloth's plane
 // (about n) counts; the axis is set from the step's history (DESIGN §1).
+// bend_terms gives the gradient and the atan2 arguments; bend_gradient is for
+// passes that need no angle (atan2 is a large share of the work).
 template <class T>
-inline T bend_angle(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3]) {
-  using std::atan2;
+inline void bend_terms(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3],
+                       T& s, T& co) {
   const V3<T> e1 = b - a, e2 = c - b;
-  const T s = dot(cross(e1, e2), n);
-  const T co = dot(e1, e2);
+  s = dot(cross(e1, e2), n);
+  co = dot(e1, e2);
   const T inv = T(1) / (s * s + co * co);
   const V3<T> ge1 = inv * (co * cross(e2, n) - s * e2);
   const V3<T> ge2 = inv * (co * cross(n, e1) - s * e1);
   g[0] = T(-1) * ge1;
   g[1] = ge1 - ge2;
   g[2] = ge2;
+}
+template <class T>
+inline T bend_angle(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3]) {
+  using std::atan2;
+  T s, co;
+  bend_terms(a, b, c, n, g, s, co);
   return atan2(s, co);
+}
+template <class T>
+inline void bend_gradient(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3]) {
+  T s, co;
+  bend_terms(a, b, c, n, g, s, co);
 }
 
 // Corner c with warp neighbour a and weft neighbour b: shear angle
 // phi = pi/2 - angle(a-c, b-c) = atan2(u.v, |u x v|). Particle order [c, a, b].
 template <class T>
-inline T shear_angle(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3]) {
-  using std::atan2;
+inline void shear_terms(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3], T& s, T& co) {
   using std::sqrt;
   const V3<T> u = a - c, v = b - c;
   const V3<T> w = cross(u, v);
-  const T s = sqrt(dot(w, w));
-  const T co = dot(u, v);
+  s = sqrt(dot(w, w));
+  co = dot(u, v);
   const T inv = T(1) / (s * s + co * co);
   const T is = T(1) / s;
   const V3<T> gu = inv * (s * v - (co * is) * cross(v, w));
@@ -80,7 +92,18 @@ inline T shear_angle(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3])
   g[0] = T(-1) * (gu + gv);
   g[1] = gu;
   g[2] = gv;
+}
+template <class T>
+inline T shear_angle(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3]) {
+  using std::atan2;
+  T s, co;
+  shear_terms(c, a, b, g, s, co);
   return atan2(co, s);
+}
+template <class T>
+inline void shear_gradient(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3]) {
+  T s, co;
+  shear_terms(c, a, b, g, s, co);
 }
 
 }  // namespace drape
