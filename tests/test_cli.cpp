@@ -252,3 +252,19 @@ TEST(Cli, Help) {
   for (const char* flag : {"--config", "--set", "--output", "--threads", "--dry-run", "--version"})
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag << " not in: " << r.out;
 }
+
+// --output naming an existing file: refused before anything is written, and
+// the file is left as it was.
+TEST(CliBad, OutputThatIsAFileIsRefusedAndUntouched) {
+  const fs::path file = tmp_dir() / "not-a-directory";
+  spit(file, "keep me\n");
+  const Result r = run_drape(
+      {"--set", "cloth.particles=[9,9]", "--set", "solver.steps=1", "--output", file.string()},
+      "output-is-file");
+  EXPECT_EQ(r.status, 2) << "stderr: " << r.err;
+  EXPECT_EQ(r.err.rfind("drape: error: --output " + file.string() + ": cannot create the output directory", 0),
+            0u)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(slurp(file), "keep me\n");
+}

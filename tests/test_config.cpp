@@ -345,6 +345,11 @@ const BadSet kBadSets[] = {
     {"bad_bool", "cloth.shear=yes", {"cloth.shear: expected a boolean (true or false), got 'yes'"}},
     {"quoted_for_bool", "cloth.shear=\"true\"", {"cloth.shear: expected a boolean", "got a string"}},
     {"dt_max_below_dt", "solver.dt_max=1e-4", {"solver.dt", "[1e-05, 0.0001]"}},
+    {"negative_memory", "solver.memory=-1", {"solver.memory: must be >= 0, got -1"}},
+    {"negative_wall_limit", "solver.wall_limit=-5", {"solver.wall_limit: must be >= 0", "got -5"}},
+    {"bad_method", "solver.method=fast", {"solver.method: must be one of newton, cg"}},
+    {"clamp_too_many_rows", "cloth.clamp=1000", {"cloth.clamp: must be in [0, NI), got 1000"}},
+    {"clamp_negative", "cloth.clamp=-1", {"cloth.clamp: must be in [0, NI), got -1"}},
 };
 
 TEST(ConfigBad, OverridesRefusedNamingTheOverride) {
