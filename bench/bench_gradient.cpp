@@ -6,46 +6,16 @@
 #include <omp.h>
 
 #include <chrono>
-#include <memory>
-#include <random>
+#include <functional>
 
-#include "amrc/active_lists.hpp"
-#include "io/kes.hpp"
-#include "solver/time_loop.hpp"
+#include "mid_drape.hpp"
 
 namespace drape {
 namespace {
 
-// A cloth mid-drape: positions jittered, forces spread over their bands.
-struct Bed {
-  Scene scene;
-  Fabric fabric;
-  Cloth cloth;
-  Model model;
-  Tiling tiling;
-  ActiveLists lists;
-  LocalReducer red;
-  LoopPolicy policy;
-  std::unique_ptr<TimeLoop> loop;
-
-  explicit Bed(int n) {
-    scene.cloth.particles = {n, n};
-    fabric = load_fabric("denim-A");
-    cloth = make_cloth(scene, fabric);
-    model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
-    tiling = Tiling(n, n, scene.cloth.tile);
-    std::vector<int> owned;
-    for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
-    build_active_lists(cloth, tiling, owned, lists);
-    loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red, scene.solver);
-    std::mt19937_64 rng(42);
-    std::uniform_real_distribution<double> u(-1, 1);
-    const Layout& L = cloth.layout;
-    for (int64_t k = 0; k < L.tension(); ++k) cloth.z[k] += 0.1 * cloth.grid.hi * u(rng);
-    for (int64_t k = L.tension(); k < L.moment(); ++k) cloth.z[k] = 5.0 * (1 + u(rng));
-    for (int64_t k = L.moment(); k < L.size(); ++k) cloth.z[k] = 1e-3 * u(rng);
-    loop->freeze_bend_axes();
-  }
+// A benchmark's world, built once per size (static in each benchmark).
+struct Bed : World {
+  explicit Bed(int n) : World(mid_drape_scene(n), load_fabric("denim-A")) { jitter_mid_drape(*this, 42); }
 };
 
 void BM_Gradient(benchmark::State& state) {

@@ -14,14 +14,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <memory>
-#include <random>
 #include <string>
 
-#include "amrc/active_lists.hpp"
 #include "io/json.hpp"
-#include "io/kes.hpp"
-#include "solver/time_loop.hpp"
+#include "mid_drape.hpp"
 
 namespace drape {
 namespace {
@@ -33,28 +29,11 @@ struct Row {
 };
 
 double run_once(int n, int iterations, Schedule sc, int threads, double* gradient_seconds) {
-  Scene scene;
-  scene.cloth.particles = {n, n};
-  scene.parallel.schedule = sc;
-  const Fabric fabric = load_fabric("denim-A");
   omp_set_num_threads(threads);
-  Cloth cloth = make_cloth(scene, fabric);
-  Model model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
-  Tiling tiling(n, n, scene.cloth.tile);
-  std::vector<int> owned;
-  for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
-  ActiveLists lists;
-  build_active_lists(cloth, tiling, owned, lists);
-  LocalReducer red;
-  LoopPolicy policy{sc, scene.parallel.chunk};
-  TimeLoop loop(cloth, model, lists, tiling, policy, red, scene.solver);
-  // The same mid-drape state for every run: jittered positions, loaded forces.
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(-1, 1);
-  const Layout& L = cloth.layout;
-  for (int64_t k = 0; k < L.tension(); ++k) cloth.z[k] += 0.1 * cloth.grid.hi * u(rng);
-  for (int64_t k = L.tension(); k < L.moment(); ++k) cloth.z[k] = 5.0 * (1 + u(rng));
-  loop.freeze_bend_axes();
+  World w(mid_drape_scene(n, sc), load_fabric("denim-A"));
+  jitter_mid_drape(w, 7);  // the same state for every run
+  TimeLoop& loop = *w.loop;
+  Cloth& cloth = w.cloth;
   CgSettings cs;
   cs.max_iterations = iterations;
   cs.tolerance = 0;

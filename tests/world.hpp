@@ -1,43 +1,11 @@
 #pragma once
-// A small simulated world for solver tests: cloth, model, tiles, lists,
-// evaluator and time loop for a scene and a fabric, all on one rank.
-#include <memory>
+// Scenes and a fabric for solver tests, built into a drape::World.
+#include <cmath>
 #include <random>
 
-#include "amrc/active_lists.hpp"
-#include "solver/model.hpp"
-#include "solver/time_loop.hpp"
+#include "solver/world.hpp"
 
 namespace drape::test {
-
-struct World {
-  Scene scene;
-  Fabric fabric;
-  Cloth cloth;
-  Model model;
-  Tiling tiling;
-  ActiveLists lists;
-  LocalReducer red;
-  LoopPolicy policy;
-  std::unique_ptr<TimeLoop> loop;
-
-  World(const Scene& s, const Fabric& f) : scene(s), fabric(f) {
-    cloth = make_cloth(scene, fabric);
-    model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
-    rebuild();
-  }
-  // After changing flags (fixing particles) or the policy.
-  void rebuild() {
-    rebuild_topology(cloth, scene.cloth.shear);
-    rebuild_geometry(cloth, fabric.density);
-    tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
-    std::vector<int> owned;
-    for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
-    build_active_lists(cloth, tiling, owned, lists);
-    policy = LoopPolicy{scene.parallel.schedule, scene.parallel.chunk};
-    loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red, scene.solver);
-  }
-};
 
 // A scene with no obstacle: n x n particles of spacing h, flat at height z.
 inline Scene flat_scene(int ni, int nj, double size_i, double size_j) {

@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "amrc/active_lists.hpp"
+#include "decomp/collective.hpp"
 #include "app/progress.hpp"
 #include "io/error.hpp"
 #include "io/json.hpp"
@@ -28,18 +29,18 @@ namespace {
 namespace fs = std::filesystem;
 
 void make_output_dir(const std::string& dir, MPI_Comm comm, int rank) {
-  int ok = 1;
+  bool ok = true;
   std::string why;
   if (rank == 0) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir)) {
-      ok = 0;
+      ok = false;
       why = ec ? ec.message() : "not a directory";
     }
   }
-  MPI_Bcast(&ok, 1, MPI_INT, 0, comm);
-  if (!ok) throw InputError("--output " + dir + ": cannot create the output directory (" + why + ")");
+  if (!root_decides(comm, ok))
+    throw InputError("--output " + dir + ": cannot create the output directory (" + why + ")");
 }
 
 FrameView frame_of(const Cloth& c, const std::vector<Block>& owned) {
@@ -180,9 +181,7 @@ void print_timing_table(const Timers& tm, double wall, const std::string& checks
 
 int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm) {
   const auto t0 = std::chrono::steady_clock::now();
-  int rank = 0, ranks = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &ranks);
+  const int rank = rank_of(comm), ranks = size_of(comm);
   if (scene.parallel.threads > 0) omp_set_num_threads(scene.parallel.threads);
   const int threads = omp_get_max_threads();
   const bool talk = rank == 0 && !opt.quiet;
@@ -235,11 +234,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   // The budget is checked every iteration, on rank 0's clock, so that every
   // rank stops at the same iteration.
   auto over_budget = [&] {
-    int over = scene.solver.wall_limit > 0 &&
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
-                   scene.solver.wall_limit;
-    MPI_Bcast(&over, 1, MPI_INT, 0, comm);
-    return over != 0;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return root_decides(comm, scene.solver.wall_limit > 0 && elapsed > scene.solver.wall_limit);
   };
   loop.stop_requested = over_budget;
   int calm = 0, last_frame = 0;  // frame 0 is written above

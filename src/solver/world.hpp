@@ -1,0 +1,43 @@
+#pragma once
+// One rank's whole simulation for a scene: cloth, model, tiles, active lists
+// and time loop, every tile owned. Tests, benchmarks and tools build on it;
+// the drape program assembles the same pieces itself, timing each phase.
+#include <memory>
+#include <vector>
+
+#include "amrc/active_lists.hpp"
+#include "solver/model.hpp"
+#include "solver/time_loop.hpp"
+
+namespace drape {
+
+struct World {
+  Scene scene;
+  Fabric fabric;
+  Cloth cloth;
+  Model model;
+  Tiling tiling;
+  ActiveLists lists;
+  LocalReducer red;
+  LoopPolicy policy;
+  std::unique_ptr<TimeLoop> loop;
+
+  World(const Scene& s, const Fabric& f) : scene(s), fabric(f) {
+    cloth = make_cloth(scene, fabric);
+    model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
+    rebuild();
+  }
+  // After changing flags (fixing particles) or the policy.
+  void rebuild() {
+    rebuild_topology(cloth, scene.cloth.shear);
+    rebuild_geometry(cloth, fabric.density);
+    tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
+    std::vector<int> owned;
+    for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
+    build_active_lists(cloth, tiling, owned, lists);
+    policy = LoopPolicy{scene.parallel.schedule, scene.parallel.chunk};
+    loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red, scene.solver);
+  }
+};
+
+}  // namespace drape
