@@ -14,7 +14,6 @@ struct Model {
   Band stretch[2];  // tension (N/m) against strain, warp and weft
   Band bend[2];     // moment (N*m/m) against curvature (1/m)
   Band shear;       // shear force (N/m) against shear angle (rad)
-  bool shear_on = true;
   double gravity[3] = {0, 0, -9.80665};
   Contact contact;
   double dt = 1e-3, dt_prev = 1e-3;  // this step and the previous one, s

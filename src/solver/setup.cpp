@@ -23,7 +23,6 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   }
   const ShearKES& s = fabric.shear;
   m.shear = Band::linear(s.g, s.hg, s.load, s.unload);
-  m.shear_on = scene.cloth.shear;
   m.use_shear = scene.cloth.shear;
   // Residual forces are measured in the weight of one finest-mesh particle.
   const double g = std::fabs(m.gravity[2]);
