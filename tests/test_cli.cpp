@@ -2,6 +2,7 @@
 // line "drape: error: ..." on stderr naming the key, flag or file, and the
 // output directory not created. Also --dry-run, --version and --help.
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -9,6 +10,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -267,4 +270,117 @@ TEST(CliBad, OutputThatIsAFileIsRefusedAndUntouched) {
       << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_EQ(slurp(file), "keep me\n");
+}
+
+// ------------------------------------------------------------ checkpoints --
+
+namespace {
+
+// A real checkpoint of a short run, made once per test process.
+fs::path good_checkpoint() {
+  static fs::path path;
+  if (!path.empty()) return path;
+  const fs::path dir = tmp_dir() / "ck-good";
+  const Result r = run_drape({"--set", "cloth.particles=[9,9]", "--set", "solver.steps=2", "--set",
+                              "output.checkpoint_every=1", "--set", "output.picture=false", "--quiet",
+                              "--output", dir.string()},
+                             "ck-good");
+  EXPECT_EQ(r.status, 0) << r.err;
+  path = dir / "checkpoint.h5";
+  return path;
+}
+
+fs::path copy_with(const std::string& name, const std::function<void(std::string&)>& damage) {
+  std::string bytes = slurp(good_checkpoint());
+  damage(bytes);
+  const fs::path p = tmp_dir() / name;
+  spit(p, bytes);
+  return p;
+}
+
+// Every file of a directory with its contents.
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) files[e.path().filename().string()] = slurp(e.path());
+  return files;
+}
+
+// The checkpoint with its format_version attribute set to 99.
+fs::path future_version() {
+  const fs::path p = tmp_dir() / "future.h5";
+  fs::copy_file(good_checkpoint(), p, fs::copy_options::overwrite_existing);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(p.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  EXPECT_GE(f, 0);
+  EXPECT_GE(H5Adelete(f, "format_version"), 0);
+  const int64_t v = 99;
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t a = H5Acreate2(f, "format_version", H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT);
+  EXPECT_GE(H5Awrite(a, H5T_NATIVE_INT64, &v), 0);
+  H5Aclose(a);
+  H5Sclose(space);
+  H5Fclose(f);
+  return p;
+}
+
+}  // namespace
+
+// Damaged, truncated, foreign and misused checkpoints: refused before
+// anything is written.
+TEST(CliBad, Checkpoint) {
+  const fs::path good = good_checkpoint();
+  ASSERT_TRUE(fs::exists(good));
+  const std::string size = std::to_string(fs::file_size(good));
+  const fs::path truncated = copy_with("truncated.h5", [](std::string& b) { b.resize(b.size() / 3); });
+  const fs::path flipped = copy_with("flipped.h5", [](std::string& b) { b[b.size() / 2] ^= 0x10; });
+  const fs::path text = tmp_dir() / "text.h5";
+  spit(text, "not a checkpoint\n");
+  const fs::path output = good.parent_path() / "drape.h5";
+  const fs::path future = future_version();
+  struct Case {
+    const char* label;
+    std::vector<std::string> args, says;
+  };
+  const std::vector<Case> cases = {
+      {"ck_missing", {"--restart", (tmp_dir() / "nope.h5").string()}, {"nope.h5", "no such file"}},
+      {"ck_directory", {"--restart", good.parent_path().string()}, {"is a directory"}},
+      {"ck_text", {"--restart", text.string()}, {text.string(), "not an HDF5 file"}},
+      {"ck_truncated", {"--restart", truncated.string()}, {truncated.string()}},
+      {"ck_flipped", {"--restart", flipped.string()}, {flipped.string(), "damaged"}},
+      {"ck_foreign", {"--restart", output.string()}, {output.string(), "not a drape checkpoint"}},
+      {"ck_version", {"--restart", future.string()}, {"format version 99"}},
+      {"ck_with_config", {"--restart", good.string(), "--config", "x.toml"}, {"--config cannot be combined"}},
+      {"ck_physics_change", {"--restart", good.string(), "--set", "solver.dt=0.1"},
+       {"solver.dt cannot change on --restart"}},
+      {"ck_bad_allowed_value", {"--restart", good.string(), "--set", "solver.steps=0"}, {"solver.steps"}},
+  };
+  const auto before = snapshot(good.parent_path());
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.label);
+    expect_refused(c.label, c.args, c.says);
+  }
+  // Without --output a restart writes beside its checkpoint: a refused one
+  // leaves that directory as it was.
+  const Result r = run_drape({"--restart", good.string(), "--set", "cloth.tile=3"}, "ck-in-place");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(snapshot(good.parent_path()), before);
+}
+
+// MPI settings: more ranks than tiles is refused on rank 0 alone, with
+// exit 2 from every rank, and no output directory.
+TEST(CliBad, MoreRanksThanTiles) {
+  const fs::path outdir = tmp_dir() / "ranks-out";
+  const fs::path err = tmp_dir() / "ranks.stderr";
+  const std::string cmd = clean_env() + " " + sh(MPIEXEC) +
+                          " -n 2 " + sh(DRAPE_BINARY) +
+                          " --set 'cloth.particles=[8,8]' --set cloth.tile=8 --output " + sh(outdir.string()) +
+                          " </dev/null >/dev/null 2>" + sh(err.string());
+  const int rc = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
+  const std::string text = slurp(err);
+  size_t ours = 0;
+  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
+  EXPECT_EQ(ours, 1u) << text;
+  EXPECT_NE(text.find("2 ranks but the cloth has only 1 tile(s)"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(outdir));
 }

@@ -10,22 +10,19 @@
 #include <optional>
 
 #include "app/run.hpp"
+#include "app/signals.hpp"
+#include "decomp/collective.hpp"
+#include "io/checkpoint.hpp"
 #include "io/config.hpp"
 #include "io/error.hpp"
 #include "io/kes.hpp"
 
 namespace {
 
-int rank_of(MPI_Comm c) {
-  int r = 0;
-  MPI_Comm_rank(c, &r);
-  return r;
-}
-
 // Every rank reaches the same verdict on input (all read the same files), so
 // each can exit on its own without a hang; only rank 0 speaks.
 int fail(int code, const std::string& what) {
-  if (rank_of(MPI_COMM_WORLD) == 0) std::cerr << "drape: error: " << what << "\n";
+  if (drape::rank_of(MPI_COMM_WORLD) == 0) std::cerr << "drape: error: " << what << "\n";
   MPI_Finalize();
   return code;
 }
@@ -35,7 +32,8 @@ int fail(int code, const std::string& what) {
 int main(int argc, char** argv) {
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
-  const bool root = rank_of(MPI_COMM_WORLD) == 0;
+  const bool root = drape::rank_of(MPI_COMM_WORLD) == 0;
+  drape::install_stop_signals();
 
   CLI::App app{"drape: hybrid MPI+OpenMP simulation of woven cloth draping, with a "
                "material model built from Kawabata (KES) fabric measurements.\n"
@@ -47,7 +45,11 @@ int main(int argc, char** argv) {
   app.add_option("-c,--config", config_path, "scene file (TOML)");
   app.add_option("-s,--set", overrides, "override a scene key: section.key=value (repeatable)")
       ->allow_extra_args(false);
-  app.add_option("-o,--output", output_dir, "output directory (default: out)");
+  app.add_option("-o,--output", output_dir,
+                 "output directory (default: out; with --restart, the checkpoint's directory)");
+  app.add_option("-r,--restart", restart,
+                 "continue the run saved in a checkpoint (DIR/checkpoint.h5); --set may change "
+                 "solver.steps, solver.wall_limit, output.* and parallel.*");
   app.add_option("-t,--threads", threads, "OpenMP threads per rank (default: OMP_NUM_THREADS)")
       ->check(CLI::Range(1, 1024));
   app.add_flag("--dry-run", dry_run, "validate, print the resolved scene and exit");
@@ -65,21 +67,44 @@ int main(int argc, char** argv) {
   }
 
   try {
-    std::optional<std::string> cfg;
-    if (!config_path.empty()) cfg = config_path;
-    drape::Scene scene = drape::load_scene(cfg, overrides);
+    drape::Scene scene;
+    drape::Fabric fabric;
+    std::optional<drape::CheckpointState> resume;
+    if (!restart.empty()) {
+      // The scene and fabric come from the checkpoint, so that the run goes
+      // on with exactly the physics it started with.
+      if (!config_path.empty())
+        throw drape::InputError("--restart " + restart + ": --config cannot be combined with "
+                                "--restart (the checkpoint holds the scene)");
+      drape::check_restart_overrides(overrides);
+      resume = drape::read_checkpoint(restart);
+      scene = drape::load_scene_text(resume->scene_toml, restart + " (scene_toml)", overrides);
+      fabric = resume->fabric;
+    } else {
+      std::optional<std::string> cfg;
+      if (!config_path.empty()) cfg = config_path;
+      scene = drape::load_scene(cfg, overrides);
+      fabric = drape::load_fabric(scene.cloth.fabric);
+    }
     if (threads > 0) scene.parallel.threads = threads;
-    const drape::Fabric fabric = drape::load_fabric(scene.cloth.fabric);
     const std::string toml = drape::scene_to_toml(scene);
     if (dry_run) {
+      if (root && resume)
+        std::cout << "# restart from " << restart << " at step " << resume->cloth.step << "\n";
       if (root) std::cout << toml;
       MPI_Finalize();
       return 0;
     }
     drape::RunOptions opt;
     opt.output_dir = output_dir;
+    // A restart goes on writing where the run was, unless told otherwise.
+    if (resume && app.count("--output") == 0) {
+      const std::filesystem::path dir = std::filesystem::path(restart).parent_path();
+      opt.output_dir = dir.empty() ? "." : dir.string();
+    }
     opt.scene_toml = toml;
     opt.quiet = quiet;
+    if (resume) opt.restart = &*resume;
     const int status = drape::run_simulation(scene, fabric, opt, MPI_COMM_WORLD);
     MPI_Finalize();
     return status;

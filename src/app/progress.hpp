@@ -14,8 +14,9 @@ namespace drape {
 class Progress {
  public:
   // wall_limit > 0: the run ends after that many seconds at the latest.
-  Progress(bool on, int steps, double wall_limit = 0)
-      : on_(on), steps_(steps), limit_(wall_limit), start_(clock::now()), last_(start_) {}
+  // first: the step the run starts after (a restart's checkpoint step).
+  Progress(bool on, int steps, double wall_limit = 0, int first = 0)
+      : on_(on), steps_(steps), first_(first), limit_(wall_limit), start_(clock::now()), last_(start_) {}
 
   void iteration(int step, int it, double cost) {
     if (!on_) return;
@@ -30,9 +31,9 @@ class Progress {
     if (!on_) return;
     const auto now = clock::now();
     const double el = seconds(start_, now);
-    if (seconds(last_, now) < 0.5 && st.step != steps_ && st.step > 1) return;
+    if (seconds(last_, now) < 0.5 && st.step != steps_ && st.step > first_ + 1) return;
     last_ = now;
-    double eta = el / st.step * (steps_ - st.step);
+    double eta = el / std::max(1, st.step - first_) * (steps_ - st.step);
     if (limit_ > 0) eta = std::min(eta, std::max(0.0, limit_ - el));
     std::printf("step %5d/%d  t %.4f s  dt %.3g ms  iterations %4d%s  cost %.4e  speed %.3g m/s  ETA %s\n",
                 st.step, steps_, st.time, st.dt * 1e3, st.iterations, st.converged ? "" : " (max)",
@@ -60,7 +61,7 @@ class Progress {
     return b;
   }
   bool on_;
-  int steps_;
+  int steps_, first_;
   double limit_;
   clock::time_point start_, last_;
 };

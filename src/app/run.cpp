@@ -9,13 +9,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 
 #include "amrc/active_lists.hpp"
 #include "decomp/collective.hpp"
 #include "app/progress.hpp"
+#include "app/signals.hpp"
 #include "io/error.hpp"
 #include "io/json.hpp"
 #include "io/output.hpp"
@@ -89,12 +92,12 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) 
 }
 
 struct Summary {
-  int steps = 0;
-  long long iterations = 0, evaluations = 0, projections = 0;
-  int max_step_iterations = 0, unconverged = 0;
-  double dt_min = 1e300, dt_max = 0;
+  RunCounters counters;  // carried across restarts
   bool at_rest = false;
   bool stopped_by_wall_limit = false;
+  int signal = 0;        // the signal that ended the run (0: none)
+  int first_step = 0;    // the restart's step, 0 for a fresh run
+  std::string checkpoint;  // the last checkpoint written, "" if none
   Table2 table2;
   StepStats last;
 };
@@ -118,15 +121,17 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("particles", (long long)cloth.grid.n());
   j.begin_array("grid").value(nullptr, cloth.grid.ni).value(nullptr, cloth.grid.nj).end_array();
   j.value("free_particles", (long long)free_particles);
-  j.value("steps", s.steps);
+  const RunCounters& n = s.counters;
+  j.value("steps", cloth.step);
   j.value("steps_requested", scene.solver.steps);
-  j.value("iterations", s.iterations);
-  j.value("evaluations", s.evaluations);
+  j.value("restarted_from_step", s.first_step);
+  j.value("iterations", (long long)n.iterations);
+  j.value("evaluations", (long long)n.evaluations);
   j.value("simulated_seconds", cloth.time);
-  j.value("iterations_per_simulated_second", cloth.time > 0 ? s.iterations / cloth.time : 0.0);
-  j.value("max_iterations_in_a_step", s.max_step_iterations);
-  j.value("unconverged_steps", s.unconverged);
-  j.begin_object("dt").value("min", s.dt_min).value("max", s.dt_max).value("last", s.last.dt).end_object();
+  j.value("iterations_per_simulated_second", cloth.time > 0 ? n.iterations / cloth.time : 0.0);
+  j.value("max_iterations_in_a_step", (long long)n.max_step_iterations);
+  j.value("unconverged_steps", (long long)n.unconverged);
+  j.begin_object("dt").value("min", n.dt_min).value("max", n.dt_max).value("last", cloth.dt_prev).end_object();
   j.begin_object("final_cost")
       .value("total", s.last.cost.total())
       .value("newton", s.last.cost.newton)
@@ -138,9 +143,11 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("max_speed", s.last.max_speed);
   j.value("at_rest", s.at_rest);
   j.value("stopped_by_wall_limit", s.stopped_by_wall_limit);
+  j.value("stopped_by_signal", s.signal ? signal_name(s.signal) : "");
+  j.value("checkpoint", s.checkpoint);
   j.value("rest_speed", scene.solver.rest_speed);
   j.value("max_penetration", penetration_depth);
-  j.value("projections", s.projections);
+  j.value("projections", (long long)n.projections);
   j.value("total_mass", cloth.total_mass());
   j.value("wall_seconds", wall);
   j.begin_object("phases");
@@ -177,11 +184,46 @@ void print_timing_table(const Timers& tm, double wall, const std::string& checks
   std::fflush(stdout);
 }
 
+// Test hook (fault injection): DRAPE_FAULT_NAN_STEP=k poisons one free
+// particle's position before step k, so the numerical-failure path (exit 3,
+// the last checkpoint kept) can be exercised on purpose.
+int fault_step() {
+  const char* v = std::getenv("DRAPE_FAULT_NAN_STEP");
+  return v ? std::atoi(v) : 0;
+}
+
+void inject_nan(Cloth& c, const ActiveLists& lists) {
+  for (int64_t p : lists.particles.items)
+    if (c.free(p)) {
+      c.x1[3 * p + 2] = std::numeric_limits<double>::quiet_NaN();  // the prediction carries it
+      return;
+    }
+}
+
+void refuse_more_ranks_than_tiles(const Scene& scene, int ranks) {
+  const Tiling t(scene.cloth.particles[0], scene.cloth.particles[1], scene.cloth.tile);
+  if (ranks > t.count())
+    throw InputError("MPI: " + std::to_string(ranks) + " ranks but the cloth has only " +
+                     std::to_string(t.count()) + " tile(s) (cloth.tile = " + std::to_string(scene.cloth.tile) +
+                     "): run at most " + std::to_string(t.count()) + " ranks or set a smaller cloth.tile");
+}
+
+void add_step(RunCounters& n, const StepStats& st) {
+  n.iterations += st.iterations;
+  n.evaluations += st.evaluations;
+  n.projections += st.projections;
+  n.max_step_iterations = std::max<int64_t>(n.max_step_iterations, st.iterations);
+  n.unconverged += st.converged ? 0 : 1;
+  n.dt_min = std::min(n.dt_min, st.dt);
+  n.dt_max = std::max(n.dt_max, st.dt);
+}
+
 }  // namespace
 
 int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm) {
   const auto t0 = std::chrono::steady_clock::now();
   const int rank = rank_of(comm), ranks = size_of(comm);
+  refuse_more_ranks_than_tiles(scene, ranks);
   if (scene.parallel.threads > 0) omp_set_num_threads(scene.parallel.threads);
   const int threads = omp_get_max_threads();
   const bool talk = rank == 0 && !opt.quiet;
@@ -196,9 +238,18 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   Tiling tiling;
   ActiveLists lists;
   std::vector<int> owned;
+  Summary sum;
+  int last_frame = -1;  // the step of the last frame written (-1: none yet)
   {
     ScopedPhase ph(tm, kSetup);
     cloth = make_cloth(scene, fabric);
+    if (opt.restart) {
+      restore_state(*opt.restart, cloth);
+      rebuild_topology(cloth, scene.cloth.shear);
+      rebuild_geometry(cloth, fabric.density);
+      sum.counters = opt.restart->counters;
+      sum.first_step = cloth.step;
+    }
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
     for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
@@ -213,6 +264,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   LocalReducer red;
   LoopPolicy policy{scene.parallel.schedule, scene.parallel.chunk};
   TimeLoop loop(cloth, model, lists, tiling, policy, red, scene.solver);
+  if (opt.restart) loop.minimizer().set_first_step(opt.restart->counters.cg_first_step);
   // Replicated work: rank 0 writes every block, the others join with none.
   std::vector<Block> blocks;
   if (rank == 0) blocks.push_back({0, cloth.grid.ni, 0, cloth.grid.nj});
@@ -221,54 +273,79 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   {
     ScopedPhase ph(tm, kOutput);
     h5 = std::make_unique<Hdf5Output>(opt.output_dir, comm, scene, opt.scene_toml, fabric,
-                                      cloth.grid.ni, cloth.grid.nj);
-    h5->write_frame(frame_of(cloth, blocks));
+                                      cloth.grid.ni, cloth.grid.nj, opt.restart ? cloth.step : -1);
+    // A restart drops the interrupted part's final frame unless it lies on
+    // the frame cadence, so the continued file matches an uninterrupted run's.
+    if (!opt.restart || (scene.output.every > 0 && cloth.step % scene.output.every == 0)) {
+      h5->write_frame(frame_of(cloth, blocks));
+      last_frame = cloth.step;
+    }
   }
-  if (talk)
+  if (talk) {
     std::printf("drape %s: %s, %d x %d particles (%lld free), fabric %s, %d rank(s) x %d thread(s)\n",
                 DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
                 (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
+    if (opt.restart)
+      std::printf("continuing %s from step %d (t = %.6g s)\n", opt.restart->path.c_str(), cloth.step,
+                  cloth.time);
+  }
 
-  Progress progress(talk, scene.solver.steps, scene.solver.wall_limit);
-  Summary sum;
-  // The budget is checked every iteration, on rank 0's clock, so that every
-  // rank stops at the same iteration.
-  auto over_budget = [&] {
+  Progress progress(talk, scene.solver.steps, scene.solver.wall_limit, cloth.step);
+  // Stop requests are polled every iteration and agreed on by all ranks, so
+  // that every rank stops at the same iteration: a signal on any rank, or
+  // the wall-clock budget on rank 0's clock. Code: 2 * signal + budget.
+  int stop_code = 0;
+  auto stop_now = [&] {
+    if (stop_code) return true;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return root_decides(comm, scene.solver.wall_limit > 0 && elapsed > scene.solver.wall_limit);
+    const bool budget = rank == 0 && scene.solver.wall_limit > 0 && elapsed > scene.solver.wall_limit;
+    stop_code = max_over_ranks(comm, 2 * stop_signal() + (budget ? 1 : 0));
+    return stop_code != 0;
   };
-  loop.stop_requested = over_budget;
-  int calm = 0, last_frame = 0;  // frame 0 is written above
+  loop.stop_requested = stop_now;
+  auto checkpoint = [&] {
+    ScopedPhase ph(tm, kOutput);
+    sum.counters.cg_first_step = loop.minimizer().first_step();
+    write_checkpoint(opt.output_dir, comm, cloth, blocks, opt.scene_toml, fabric, sum.counters);
+    sum.checkpoint = opt.output_dir + "/checkpoint.h5";
+    return cloth.step;
+  };
+  const int every = scene.output.every, ck_every = scene.output.checkpoint_every;
+  const int poison = fault_step();
+  int last_checkpoint = opt.restart ? cloth.step : -1;
   const LoopClock clock0 = loop_clock();
   const auto stepping0 = std::chrono::steady_clock::now();
-  for (int s = 0; s < scene.solver.steps; ++s) {
+  while (cloth.step < scene.solver.steps) {
+    if (poison == cloth.step + 1) inject_nan(cloth, lists);
     const StepStats st = loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
-    sum.steps = st.step;
-    sum.iterations += st.iterations;
-    sum.evaluations += st.evaluations;
-    sum.projections += st.projections;
-    sum.max_step_iterations = std::max(sum.max_step_iterations, st.iterations);
-    sum.unconverged += st.converged ? 0 : 1;
-    sum.dt_min = std::min(sum.dt_min, st.dt);
-    sum.dt_max = std::max(sum.dt_max, st.dt);
+    if (st.stopped) break;
+    add_step(sum.counters, st);
     sum.last = st;
     progress.step(st);
-    const bool last = s + 1 == scene.solver.steps;
-    calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed) ? calm + 1 : 0;
-    sum.at_rest = calm >= 3;
-    if (!last && !sum.at_rest && scene.output.every > 0 && st.step % scene.output.every == 0) {
+    const bool last = st.step == scene.solver.steps;
+    sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed)
+                            ? sum.counters.calm + 1 : 0;
+    sum.at_rest = sum.counters.calm >= 3;
+    if (!last && !sum.at_rest && every > 0 && st.step % every == 0) {
       ScopedPhase ph(tm, kOutput);
       h5->write_frame(frame_of(cloth, blocks));
       last_frame = st.step;
     }
-    if (sum.at_rest) break;
-    if ((st.stopped || over_budget()) && !last) {
-      sum.stopped_by_wall_limit = true;
-      if (talk) std::printf("wall limit of %.0f s reached after step %d: ending the run\n",
-                            scene.solver.wall_limit, st.step);
-      break;
-    }
+    if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
+    if (sum.at_rest || stop_now()) break;
   }
+  sum.signal = stop_code / 2;
+  sum.stopped_by_wall_limit = stop_code == 1;
+  // A stopped run always leaves a checkpoint to continue from; a finished
+  // one does when checkpoints were asked for.
+  if ((stop_code || ck_every > 0) && last_checkpoint != cloth.step) last_checkpoint = checkpoint();
+  if (talk && sum.stopped_by_wall_limit)
+    std::printf("wall limit of %.0f s reached after step %d: ending the run\n", scene.solver.wall_limit,
+                cloth.step);
+  if (rank == 0 && sum.signal)
+    std::printf("%s received: the step in progress was rolled back; the state after step %d is in "
+                "%s (continue with: drape --restart %s)\n",
+                signal_name(sum.signal), cloth.step, sum.checkpoint.c_str(), sum.checkpoint.c_str());
   if (scene.solver.rest_speed <= 0) sum.at_rest = sum.last.max_speed < 1e-3;
   sum.table2 = table2(clock0, loop_clock(),
                       std::chrono::duration<double>(std::chrono::steady_clock::now() - stepping0).count(),

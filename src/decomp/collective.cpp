@@ -20,4 +20,10 @@ bool root_decides(MPI_Comm comm, bool decision) {
   return v != 0;
 }
 
+int max_over_ranks(MPI_Comm comm, int value) {
+  int out = value;
+  MPI_Allreduce(&value, &out, 1, MPI_INT, MPI_MAX, comm);
+  return out;
+}
+
 }  // namespace drape

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -69,6 +70,7 @@ const KeySpec kKeys[] = {
     {"solver", "wall_limit", Kind::Float},
     {"output", "every", Kind::Int},
     {"output", "picture", Kind::Bool},
+    {"output", "checkpoint_every", Kind::Int},
     {"parallel", "schedule", Kind::String},
     {"parallel", "chunk", Kind::Int},
     {"parallel", "threads", Kind::Int},
@@ -246,6 +248,16 @@ struct Config {
   }
 };
 
+toml::table parse_scene_text(const std::string& text, const std::string& origin) {
+  try {
+    return toml::parse(text, origin);
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    fail(origin + ":" + std::to_string(b.line) + ":" + std::to_string(b.column),
+         "TOML syntax error: " + std::string(e.description()));
+  }
+}
+
 toml::table parse_scene_file(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
@@ -256,13 +268,7 @@ toml::table parse_scene_file(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   if (!in) fail("", "cannot read scene file '" + path + "'");
-  try {
-    return toml::parse(text.str(), path);
-  } catch (const toml::parse_error& e) {
-    const auto& b = e.source().begin;
-    fail(path + ":" + std::to_string(b.line) + ":" + std::to_string(b.column),
-         "TOML syntax error: " + std::string(e.description()));
-  }
+  return parse_scene_text(text.str(), path);
 }
 
 std::string trim(const std::string& s) {
@@ -474,6 +480,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("solver.wall_limit", s.solver.wall_limit);
   r.get("output.every", s.output.every);
   r.get("output.picture", s.output.picture);
+  r.get("output.checkpoint_every", s.output.checkpoint_every);
   r.get_enum("parallel.schedule", s.parallel.schedule,
              {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided});
   r.get("parallel.chunk", s.parallel.chunk);
@@ -546,6 +553,9 @@ void validate(const Config& cfg, const Scene& s) {
         "must be >= 0 (0: automatic)" + got(v.contact_thickness));
 
   check(s.output.every >= 0, "output.every", "must be >= 0, got " + std::to_string(s.output.every));
+  check(s.output.checkpoint_every >= 0, "output.checkpoint_every",
+        "must be >= 0 (0: only on a signal or the wall limit), got " +
+            std::to_string(s.output.checkpoint_every));
   check(s.parallel.chunk >= 1, "parallel.chunk", "must be >= 1, got " + std::to_string(s.parallel.chunk));
   check(s.parallel.threads >= 0 && s.parallel.threads <= 1024, "parallel.threads",
         "must be in [0, 1024] (0: OpenMP default), got " + std::to_string(s.parallel.threads));
@@ -564,15 +574,44 @@ std::string b(bool v) { return v ? "true" : "false"; }
 
 }  // namespace
 
-Scene load_scene(const std::optional<std::string>& path, const std::vector<std::string>& overrides) {
-  Config cfg;
-  if (path) cfg.root = parse_scene_file(*path);
+namespace {
+
+Scene resolve(Config& cfg, const std::vector<std::string>& overrides) {
   for (const std::string& o : overrides) apply_override(cfg, o);
   refuse_unknown(cfg);
   Scene s;  // its defaults are the embedded default scene
   read_scene(cfg, s);
   validate(cfg, s);
   return s;
+}
+
+}  // namespace
+
+Scene load_scene(const std::optional<std::string>& path, const std::vector<std::string>& overrides) {
+  Config cfg;
+  if (path) cfg.root = parse_scene_file(*path);
+  return resolve(cfg, overrides);
+}
+
+Scene load_scene_text(const std::string& toml, const std::string& origin,
+                      const std::vector<std::string>& overrides) {
+  Config cfg;
+  cfg.root = parse_scene_text(toml, origin);
+  return resolve(cfg, overrides);
+}
+
+void check_restart_overrides(const std::vector<std::string>& overrides) {
+  // What may change when a run continues: how long, how it is written and
+  // how it is run; never the physics, or the restart would not continue it.
+  static const char* const allowed[] = {"solver.steps", "solver.wall_limit", "output.", "parallel."};
+  for (const std::string& o : overrides) {
+    const std::string key = trim(o.substr(0, o.find('=')));
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || key == a || (a[std::strlen(a) - 1] == '.' && key.rfind(a, 0) == 0);
+    if (!ok)
+      fail("--set " + o, key + " cannot change on --restart (the checkpoint fixes the physics); "
+                          "allowed: solver.steps, solver.wall_limit, output.*, parallel.*");
+  }
 }
 
 std::string scene_to_toml(const Scene& s) {
@@ -614,6 +653,8 @@ std::string scene_to_toml(const Scene& s) {
   os << "\n[output]\n";
   line(os, "every", std::to_string(s.output.every), "frame every N steps (0: final only)");
   line(os, "picture", b(s.output.picture), "drape.png of the final state");
+  line(os, "checkpoint_every", std::to_string(s.output.checkpoint_every),
+       "checkpoint.h5 every N steps and at the end (0: on a signal or the wall limit only)");
   const auto& p = s.parallel;
   os << "\n[parallel]\n";
   line(os, "schedule", quote(to_string(p.schedule)), "active-lists | static | dynamic | guided");

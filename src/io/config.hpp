@@ -16,6 +16,13 @@ namespace drape {
 Scene load_scene(const std::optional<std::string>& path,
                  const std::vector<std::string>& overrides);
 
+// The same from TOML text (a checkpoint's scene); `origin` names it in errors.
+Scene load_scene_text(const std::string& toml, const std::string& origin,
+                      const std::vector<std::string>& overrides);
+
+// Refuses --set keys that a restart must not change (InputError).
+void check_restart_overrides(const std::vector<std::string>& overrides);
+
 // The resolved scene as TOML text (what --dry-run prints; also stored in outputs).
 std::string scene_to_toml(const Scene& s);
 

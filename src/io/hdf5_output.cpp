@@ -30,6 +30,7 @@
 #include <hdf5.h>
 
 #include <charconv>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -38,6 +39,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/h5.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
 
@@ -46,122 +48,10 @@
 #endif
 
 namespace drape {
+
+using namespace h5;
+
 namespace {
-
-// ---------------------------------------------------------------- errors --
-
-// The innermost HDF5 error description, so that messages say what failed.
-std::string hdf5_error_text() {
-  std::string text;
-  auto walk = [](unsigned n, const H5E_error2_t* e, void* data) -> herr_t {
-    auto* out = static_cast<std::string*>(data);
-    if (n == 0 && e->desc && *e->desc) *out = e->desc;
-    return 0;
-  };
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, walk, &text);
-  H5Eclear2(H5E_DEFAULT);
-  return text;
-}
-
-[[noreturn]] void fail(const std::string& what) {
-  std::string detail = hdf5_error_text();
-  throw std::runtime_error("HDF5 output: " + what + (detail.empty() ? "" : " (" + detail + ")"));
-}
-
-hid_t check(hid_t id, const std::string& what) {
-  if (id < 0) fail(what);
-  return id;
-}
-
-void check_status(herr_t status, const std::string& what) {
-  if (status < 0) fail(what);
-}
-
-// Owns one HDF5 identifier; closes it on scope exit, also while unwinding,
-// so that a failed write still lets the file be closed.
-class Handle {
- public:
-  using Closer = herr_t (*)(hid_t);
-  Handle() = default;
-  Handle(hid_t id, Closer close) : id_(id), close_(close) {}
-  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, -1)), close_(o.close_) {}
-  Handle& operator=(Handle&& o) noexcept {
-    reset();
-    id_ = std::exchange(o.id_, -1);
-    close_ = o.close_;
-    return *this;
-  }
-  ~Handle() { reset(); }
-  hid_t get() const { return id_; }
-  void reset() {
-    if (id_ >= 0 && close_) close_(id_);
-    id_ = -1;
-  }
-  // Closes now and reports failure (a close can be where data hits the disk).
-  void close(const std::string& what) {
-    hid_t id = std::exchange(id_, -1);
-    if (id >= 0) check_status(close_(id), what);
-  }
-
- private:
-  hid_t id_ = -1;
-  Closer close_ = nullptr;
-};
-
-Handle make_space(const std::vector<hsize_t>& dims) {
-  return {check(H5Screate_simple(int(dims.size()), dims.data(), nullptr), "creating a dataspace"),
-          H5Sclose};
-}
-
-Handle make_plist(hid_t cls, const std::string& what) {
-  return {check(H5Pcreate(cls), what), H5Pclose};
-}
-
-// ------------------------------------------------------------ attributes --
-
-Handle string_type(size_t len) {
-  Handle t(check(H5Tcopy(H5T_C_S1), "creating a string type"), H5Tclose);
-  check_status(H5Tset_size(t.get(), len + 1), "sizing a string type");  // + terminator
-  check_status(H5Tset_strpad(t.get(), H5T_STR_NULLTERM), "string padding");
-  check_status(H5Tset_cset(t.get(), H5T_CSET_UTF8), "string character set");
-  return t;
-}
-
-void put_string(hid_t obj, const char* name, const std::string& value) {
-  Handle type = string_type(value.size());
-  Handle space(check(H5Screate(H5S_SCALAR), "creating a scalar dataspace"), H5Sclose);
-  const std::string what = std::string("attribute '") + name + "'";
-  Handle attr(check(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
-                    "creating " + what),
-              H5Aclose);
-  check_status(H5Awrite(attr.get(), type.get(), value.c_str()), "writing " + what);
-}
-
-template <class T>
-void put_numbers(hid_t obj, const char* name, hid_t file_type, hid_t mem_type, const T* v,
-                 size_t n) {
-  Handle space = n == 1 ? Handle(check(H5Screate(H5S_SCALAR), "creating a scalar dataspace"),
-                                 H5Sclose)
-                        : make_space({hsize_t(n)});
-  const std::string what = std::string("attribute '") + name + "'";
-  Handle attr(check(H5Acreate2(obj, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
-                    "creating " + what),
-              H5Aclose);
-  check_status(H5Awrite(attr.get(), mem_type, v), "writing " + what);
-}
-
-void put_double(hid_t obj, const char* name, double v) {
-  put_numbers(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v, 1);
-}
-
-void put_pair(hid_t obj, const char* name, double warp, double weft) {
-  const double v[2] = {warp, weft};
-  put_numbers(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v, 2);
-}
-
-void put_int(hid_t obj, const char* name, int64_t v) {
-  put_numbers(obj, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &v, 1);
-}
 
 void put_fabric(hid_t root, const Fabric& fab) {
   put_string(root, "fabric", fab.name);
@@ -197,70 +87,6 @@ const char* kUnits =
     "SI: positions m; tension, shear N/m; moment N*m/m; time s; fabric_density kg/m^2; "
     "fabric_thickness m; kes_emt, kes_lt, kes_rt fractions; kes_fm N/m; kes_wt J/m^2; "
     "kes_b N*m; kes_hb N; kes_g N/m/rad; kes_hg N/m (hb, hg: half the KES loop widths)";
-
-// ------------------------------------------------------------- datasets --
-
-// File and memory dataspaces of an (NI x NJ [x C]) array, both selecting the
-// union of the owned blocks (or nothing).
-struct Selection {
-  Handle file, mem;
-  hsize_t count = 0;  // elements selected
-};
-
-Selection select_blocks(const std::vector<Block>& owned, int ni, int nj, int comps) {
-  std::vector<hsize_t> dims = {hsize_t(ni), hsize_t(nj)};
-  if (comps > 1) dims.push_back(hsize_t(comps));
-  Selection s{make_space(dims), make_space(dims), 0};
-  H5S_seloper_t op = H5S_SELECT_SET;
-  for (const Block& b : owned) {
-    if (b.i0 < 0 || b.j0 < 0 || b.i1 > ni || b.j1 > nj)
-      throw std::runtime_error("HDF5 output: an owned block lies outside the grid");
-    if (b.i1 <= b.i0 || b.j1 <= b.j0) continue;
-    const hsize_t start[3] = {hsize_t(b.i0), hsize_t(b.j0), 0};
-    const hsize_t count[3] = {hsize_t(b.i1 - b.i0), hsize_t(b.j1 - b.j0), hsize_t(comps)};
-    for (hid_t sp : {s.file.get(), s.mem.get()})
-      check_status(H5Sselect_hyperslab(sp, op, start, nullptr, count, nullptr),
-                   "selecting an owned block");
-    op = H5S_SELECT_OR;
-    s.count += count[0] * count[1] * count[2];
-  }
-  if (op == H5S_SELECT_SET) {  // owns nothing: still joins the collective write
-    check_status(H5Sselect_none(s.file.get()), "selecting nothing");
-    check_status(H5Sselect_none(s.mem.get()), "selecting nothing");
-  }
-  return s;
-}
-
-// Dataset creation without modification times, so identical runs give
-// identical files.
-Handle untimed_dcpl() {
-  Handle dcpl = make_plist(H5P_DATASET_CREATE, "creating a dataset property list");
-  check_status(H5Pset_obj_track_times(dcpl.get(), false), "switching off time tracking");
-  return dcpl;
-}
-
-Handle untimed_gcpl() {
-  Handle gcpl = make_plist(H5P_GROUP_CREATE, "creating a group property list");
-  check_status(H5Pset_obj_track_times(gcpl.get(), false), "switching off time tracking");
-  return gcpl;
-}
-
-// Collective: creates `name` under `group` and writes this rank's selection.
-void write_dataset(hid_t group, const std::string& name, hid_t file_type, hid_t mem_type,
-                   const void* data, const Selection& sel, hid_t dxpl) {
-  Handle dcpl = untimed_dcpl();
-  Handle shape(check(H5Scopy(sel.file.get()), "copying a dataspace"), H5Sclose);
-  check_status(H5Sselect_all(shape.get()), "selecting a dataspace");
-  Handle ds(check(H5Dcreate2(group, name.c_str(), file_type, shape.get(), H5P_DEFAULT, dcpl.get(),
-                             H5P_DEFAULT),
-                  "creating dataset '" + name + "'"),
-            H5Dclose);
-  static const double dummy = 0;  // some buffer, even where nothing is selected
-  const void* buf = sel.count > 0 && data ? data : &dummy;
-  check_status(H5Dwrite(ds.get(), mem_type, sel.mem.get(), sel.file.get(), dxpl, buf),
-               "writing dataset '" + name + "'");
-  ds.close("closing dataset '" + name + "'");
-}
 
 std::string frame_name(int step) {
   char buf[32];
@@ -382,6 +208,8 @@ struct Hdf5Output::Impl {
   bool finished = false;
 
   void open(const Scene& scene, const std::string& toml, const Fabric& fabric);
+  bool reopen(const std::string& toml, int resume_step);
+  void open_file(bool create);
   void write_quads();
   void write(const FrameView& f);
   void close_and_publish();
@@ -392,17 +220,7 @@ void Hdf5Output::Impl::open(const Scene& scene, const std::string& toml, const F
   // Errors become exceptions with messages; HDF5's own stack printing would
   // only repeat them, from every rank.
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  Handle fapl = make_plist(H5P_FILE_ACCESS, "creating a file access property list");
-  check_status(H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL), "selecting the MPI-IO driver");
-  // 1.8 object headers: large attributes (a long scene_toml) go to dense
-  // storage, and HDF5 1.8 and later can still read the file.
-  check_status(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18),
-               "setting the file format version");
-  file = Handle(check(H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
-                      "cannot create " + tmp_path),
-                H5Fclose);
-  dxpl = make_plist(H5P_DATASET_XFER, "creating a transfer property list");
-  check_status(H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE), "requesting collective I/O");
+  open_file(true);
 
   // Attributes are metadata: every rank writes the same values.
   hid_t root = file.get();
@@ -415,20 +233,75 @@ void Hdf5Output::Impl::open(const Scene& scene, const std::string& toml, const F
   put_string(root, "drape_version", DRAPE_VERSION);
   put_string(root, "units", kUnits);
 
-  Handle gcpl = untimed_gcpl();
-  frames = Handle(check(H5Gcreate2(root, "frames", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
-                        "creating group /frames"),
-                  H5Gclose);
+  frames = create_group(root, "frames");
   write_quads();
+}
+
+void Hdf5Output::Impl::open_file(bool create) {
+  Handle fapl = make_plist(H5P_FILE_ACCESS, "creating a file access property list");
+  check_status(H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL), "selecting the MPI-IO driver");
+  // 1.8 object headers: large attributes (a long scene_toml) go to dense
+  // storage, and HDF5 1.8 and later can still read the file.
+  check_status(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18),
+               "setting the file format version");
+  const hid_t id = create ? H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get())
+                          : H5Fopen(tmp_path.c_str(), H5F_ACC_RDWR, fapl.get());
+  file = Handle(check(id, (create ? "cannot create " : "cannot open ") + tmp_path), H5Fclose);
+  dxpl = make_plist(H5P_DATASET_XFER, "creating a transfer property list");
+  check_status(H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE), "requesting collective I/O");
+}
+
+// A restart continues the run's drape.h5 (a copy, published on finish like
+// a new file) so the animation has no gap; false when there is none to
+// continue, or it is of another grid.
+bool Hdf5Output::Impl::reopen(const std::string& toml, int resume_step) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  int ok = 0;
+  if (rank == 0) {
+    std::error_code ec;
+    ok = std::filesystem::is_regular_file(final_path, ec) &&
+         std::filesystem::copy_file(final_path, tmp_path,
+                                    std::filesystem::copy_options::overwrite_existing, ec) &&
+         !ec;
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, comm);
+  if (!ok) return false;
+  open_file(false);
+  const hid_t root = file.get();
+  if (get_int(root, "ni") != ni || get_int(root, "nj") != nj ||
+      H5Lexists(root, "frames", H5P_DEFAULT) <= 0) {
+    file.reset();
+    return false;
+  }
+  check_status(H5Adelete(root, "scene_toml"), "replacing attribute 'scene_toml'");
+  put_string(root, "scene_toml", toml);
+  frames = Handle(check(H5Gopen2(root, "frames", H5P_DEFAULT), "opening group /frames"), H5Gclose);
+  std::vector<std::string> names;
+  auto collect = [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
+    static_cast<std::vector<std::string>*>(data)->push_back(name);
+    return 0;
+  };
+  check_status(H5Literate(frames.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr, collect, &names),
+               "listing /frames");
+  for (const std::string& name : names) {
+    Handle g(check(H5Gopen2(frames.get(), name.c_str(), H5P_DEFAULT), "opening frame " + name), H5Gclose);
+    const int step = int(get_int(g.get(), "step"));
+    const double time = get_double(g.get(), "time");
+    auto has = [&](const char* ds) { return H5Lexists(g.get(), ds, H5P_DEFAULT) > 0; };
+    const FrameRecord r{step, time, has("tension"), has("moment"), has("shear"), has("level")};
+    g.reset();
+    if (step >= resume_step)
+      check_status(H5Ldelete(frames.get(), name.c_str(), H5P_DEFAULT), "dropping frame " + name);
+    else
+      records.push_back(r);
+  }
+  return true;
 }
 
 // Quad q = i*(NJ-1) + j: (i,j) (i+1,j) (i+1,j+1) (i,j+1), counter-clockwise
 // seen from +z when i runs along x and j along y. Rank 0 writes it all.
 void Hdf5Output::Impl::write_quads() {
-  Handle gcpl = untimed_gcpl();
-  Handle mesh(check(H5Gcreate2(file.get(), "mesh", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
-                    "creating group /mesh"),
-              H5Gclose);
+  Handle mesh = create_group(file.get(), "mesh");
   const hsize_t nq = hsize_t(ni - 1) * hsize_t(nj - 1);
   std::vector<int32_t> quads;
   if (rank == 0) {
@@ -478,10 +351,7 @@ void Hdf5Output::Impl::write(const FrameView& f) {
   if (all[0] & all[1]) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
 
   const std::string name = frame_name(f.step);
-  Handle gcpl = untimed_gcpl();
-  Handle group(check(H5Gcreate2(frames.get(), name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
-                     "creating group /frames/" + name + " (was this step written before?)"),
-               H5Gclose);
+  Handle group = create_group(frames.get(), name);
   put_int(group.get(), "step", f.step);
   put_double(group.get(), "time", f.time);
 
@@ -544,7 +414,8 @@ void Hdf5Output::Impl::abandon() noexcept {
 // ------------------------------------------------------------ interface --
 
 Hdf5Output::Hdf5Output(const std::string& dir, MPI_Comm comm, const Scene& scene,
-                       const std::string& scene_toml, const Fabric& fabric, int ni, int nj)
+                       const std::string& scene_toml, const Fabric& fabric, int ni, int nj,
+                       int resume_step)
     : impl_(std::make_unique<Impl>()) {
   if (ni < 2 || nj < 2) throw std::runtime_error("HDF5 output: the grid needs 2x2 particles at least");
   Impl& m = *impl_;
@@ -556,7 +427,7 @@ Hdf5Output::Hdf5Output(const std::string& dir, MPI_Comm comm, const Scene& scene
   m.nj = nj;
   MPI_Comm_rank(comm, &m.rank);
   try {
-    m.open(scene, scene_toml, fabric);
+    if (resume_step < 0 || !m.reopen(scene_toml, resume_step)) m.open(scene, scene_toml, fabric);
   } catch (...) {
     m.abandon();
     throw;

@@ -16,9 +16,12 @@ namespace drape {
 
 class Hdf5Output {
  public:
-  // Collective over `comm`. Creates DIR/drape.h5.tmp.
+  // Collective over `comm`. Creates DIR/drape.h5.tmp. With resume_step >= 0
+  // (a restart) and a DIR/drape.h5 of the same grid, continues a copy of it
+  // instead: its frames before resume_step are kept, later ones dropped.
   Hdf5Output(const std::string& dir, MPI_Comm comm, const Scene& scene,
-             const std::string& scene_toml, const Fabric& fabric, int ni, int nj);
+             const std::string& scene_toml, const Fabric& fabric, int ni, int nj,
+             int resume_step = -1);
   ~Hdf5Output();  // without finish(): closes and removes the temporary file
   Hdf5Output(const Hdf5Output&) = delete;
   Hdf5Output& operator=(const Hdf5Output&) = delete;

@@ -39,6 +39,11 @@ class Minimizer {
   CgResult minimize(Evaluator& ev, double* z, const CgSettings& s, Timers& timers,
                     const std::function<void(int, double)>& on_iteration = {});
 
+  // The first trial step of the next line search: carried from iteration to
+  // iteration and step to step, so a checkpoint keeps it.
+  double first_step() const { return alpha_; }
+  void set_first_step(double a) { alpha_ = a; }
+
   // Tile-ordered dot products (exposed for tests).
   double dot(const double* a, const double* b);
 

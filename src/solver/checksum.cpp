@@ -1,7 +1,6 @@
 #include "solver/checksum.hpp"
 
 #include <cstdio>
-#include <cstring>
 
 #include "decomp/tiles.hpp"
 
@@ -9,33 +8,17 @@ namespace drape {
 
 namespace {
 
-inline uint64_t mix(uint64_t h) {  // splitmix64 finaliser
-  h ^= h >> 30;
-  h *= 0xbf58476d1ce4e5b9ULL;
-  h ^= h >> 27;
-  h *= 0x94d049bb133111ebULL;
-  h ^= h >> 31;
-  return h;
-}
-
-inline uint64_t bits(double v) {
-  uint64_t u;
-  std::memcpy(&u, &v, sizeof u);
-  return u;
-}
-
 uint64_t particle_hash(const Cloth& c, int64_t p, uint64_t seed) {
-  uint64_t h = mix(seed ^ uint64_t(p));
-  auto add = [&](uint64_t v) { h = mix(h ^ (v + 0x9e3779b97f4a7c15ULL)); };
-  for (int k = 0; k < 3; ++k) add(bits(c.x()[3 * p + k]));
+  Hasher h(seed ^ uint64_t(p));
+  for (int k = 0; k < 3; ++k) h.add(c.x()[3 * p + k]);
   for (int d = 0; d < 2; ++d) {
-    add(bits(c.tension()[2 * p + d]));
-    add(bits(c.moment()[2 * p + d]));
+    h.add(c.tension()[2 * p + d]);
+    h.add(c.moment()[2 * p + d]);
   }
-  add(bits(c.shear()[p]));
-  add(c.flags[p]);
-  add(c.level[p]);
-  return h;
+  h.add(c.shear()[p]);
+  h.add(uint64_t(c.flags[p]));
+  h.add(uint64_t(c.level[p]));
+  return h.value();
 }
 
 }  // namespace

@@ -151,6 +151,7 @@ void TimeLoop::accept(StepStats& st) {
 StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>& on_iteration) {
   StepStats st;
   st.step = c_.step + 1;
+  const double dt_start = c_.dt, first_step = cg_.first_step();
   std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
   std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.f1.begin());
   freeze_bend_axes();
@@ -183,8 +184,15 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
     c_.dt = std::max(spec_.dt_min, 0.5 * c_.dt);
     ++st.retries;
   }
+  if (r.stopped) {  // back to the end of the previous step: a clean state to save
+    std::copy(z_saved_.begin(), z_saved_.end(), c_.z.begin());
+    c_.dt = dt_start;
+    cg_.set_first_step(first_step);
+    st.stopped = true;
+    st.step = c_.step;
+    return st;
+  }
   st.converged = r.converged;
-  st.stopped = r.stopped;
   st.cost_per_particle = r.cost_per_particle;
   st.dt = c_.dt;
   accept(st);

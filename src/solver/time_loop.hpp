@@ -21,7 +21,9 @@ struct StepStats {
   double cost_per_particle = 0;
   double max_speed = 0;   // m/s over free particles
   int64_t projections = 0;  // particles pushed back out of an obstacle
-  bool stopped = false;     // stop_requested() cut the step short
+  // stop_requested() interrupted the step: it was rolled back, the cloth is
+  // as it was after the previous step (nothing else in this record counts).
+  bool stopped = false;
 };
 
 class TimeLoop {
@@ -29,7 +31,8 @@ class TimeLoop {
   TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const Tiling& tiling,
            const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec);
 
-  // Advances one step. Throws NumericalError on NaN/Inf or divergence.
+  // Advances one step, or leaves the cloth untouched if stopped (see
+  // StepStats::stopped). Throws NumericalError on NaN/Inf or divergence.
   StepStats step(Timers& timers, const std::function<void(int, double)>& on_iteration = {});
 
   // Polled every iteration (see CgSettings::stop_requested).

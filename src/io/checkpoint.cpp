@@ -1,0 +1,378 @@
+// Checkpoint writing (collective, parallel HDF5) and reading (verified).
+// Layout and guarantees: see checkpoint.hpp.
+#include "io/checkpoint.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "io/error.hpp"
+#include "io/h5.hpp"
+#include "solver/checksum.hpp"
+
+#ifndef DRAPE_VERSION
+#define DRAPE_VERSION "unknown"
+#endif
+
+namespace drape {
+
+using namespace h5;
+
+namespace {
+
+const char* const kFormat = "drape checkpoint";
+const int64_t kFormatVersion = 1;
+
+// ------------------------------------------------------------ the digest --
+
+// Sum over the given blocks of a hash of everything a particle carries.
+uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks) {
+  const int64_t n = c.grid.n();
+  uint64_t sum = 0;
+  for (const Block& b : blocks)
+    for (int i = b.i0; i < b.i1; ++i)
+      for (int j = b.j0; j < b.j1; ++j) {
+        const int64_t p = c.grid.id(i, j);
+        Hasher h(0x452821e638d01377ULL ^ uint64_t(p));
+        for (int k = 0; k < 3; ++k) {
+          h.add(c.z[3 * p + k]);
+          h.add(c.x1[3 * p + k]);
+          h.add(c.x2[3 * p + k]);
+        }
+        for (int k = 0; k < 2; ++k) {
+          h.add(c.z[3 * n + 2 * p + k]);
+          h.add(c.z[5 * n + 2 * p + k]);
+        }
+        h.add(c.z[7 * n + p]);
+        h.add(uint64_t(c.flags[p]));
+        h.add(uint64_t(c.level[p]));
+        sum += h.value();
+      }
+  return sum;
+}
+
+void add_curve(Hasher& h, const Curve& c) {
+  h.add(uint64_t(c.q.size()));
+  for (size_t k = 0; k < c.q.size(); ++k) {
+    h.add(c.q[k]);
+    h.add(c.f[k]);
+  }
+}
+
+std::vector<double> fabric_numbers(const Fabric& f) {
+  std::vector<double> v = {f.density, f.thickness};
+  for (const TensileKES& t : f.tensile) v.insert(v.end(), {t.emt, t.lt, t.rt, t.fm});
+  for (const BendingKES& b : f.bending) v.insert(v.end(), {b.b, b.hb});
+  v.insert(v.end(), {f.shear.g, f.shear.hg});
+  return v;
+}
+
+// The measured curves by dataset name, in a fixed order.
+template <class F>
+std::vector<std::pair<std::string, Curve*>> curves_of(F& f) {
+  using C = Curve*;
+  return {{"tensile_warp_load", C(&f.tensile[0].load)},   {"tensile_warp_unload", C(&f.tensile[0].unload)},
+          {"tensile_weft_load", C(&f.tensile[1].load)},   {"tensile_weft_unload", C(&f.tensile[1].unload)},
+          {"bending_warp_load", C(&f.bending[0].load)},   {"bending_warp_unload", C(&f.bending[0].unload)},
+          {"bending_weft_load", C(&f.bending[1].load)},   {"bending_weft_unload", C(&f.bending[1].unload)},
+          {"shear_load", C(&f.shear.load)},               {"shear_unload", C(&f.shear.unload)}};
+}
+
+std::vector<double> counter_numbers(const RunCounters& r) {
+  return {double(r.iterations), double(r.evaluations), double(r.projections),
+          double(r.max_step_iterations), double(r.unconverged), double(r.calm),
+          r.dt_min, r.dt_max, r.cg_first_step};
+}
+
+RunCounters counters_from(const std::vector<double>& v) {
+  RunCounters r;
+  r.iterations = int64_t(v[0]);
+  r.evaluations = int64_t(v[1]);
+  r.projections = int64_t(v[2]);
+  r.max_step_iterations = int64_t(v[3]);
+  r.unconverged = int64_t(v[4]);
+  r.calm = int64_t(v[5]);
+  r.dt_min = v[6];
+  r.dt_max = v[7];
+  r.cg_first_step = v[8];
+  return r;
+}
+
+// Everything that is not per particle.
+uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const RunCounters& r) {
+  Hasher h(0xa4093822299f31d0ULL);
+  h.add(uint64_t(c.grid.ni));
+  h.add(uint64_t(c.grid.nj));
+  h.add(uint64_t(c.step));
+  for (double v : {c.time, c.dt, c.dt_prev}) h.add(v);
+  h.add(toml);
+  h.add(fabric.name);
+  h.add(fabric.source);
+  for (double v : fabric_numbers(fabric)) h.add(v);
+  for (auto& [name, curve] : curves_of(fabric)) add_curve(h, *curve);
+  for (double v : counter_numbers(r)) h.add(v);
+  return h.value();
+}
+
+std::string hex(uint64_t v) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", (unsigned long long)v);
+  return buf;
+}
+
+// ------------------------------------------------------------- writing --
+
+void write_fabric(hid_t root, const Fabric& fabric, int rank, hid_t dxpl) {
+  Handle g = create_group(root, "fabric");
+  put_string(g.get(), "name", fabric.name);
+  put_string(g.get(), "source", fabric.source);
+  auto write_rows = [&](const std::string& name, const std::vector<double>& v, hsize_t cols) {
+    const hsize_t rows = v.size() / cols;
+    std::vector<hsize_t> dims = {rows};
+    if (cols > 1) dims.push_back(cols);
+    Selection sel{make_space(dims), make_space(dims), rank == 0 ? hsize_t(v.size()) : 0};
+    if (rank != 0) {
+      check_status(H5Sselect_none(sel.file.get()), "selecting nothing");
+      check_status(H5Sselect_none(sel.mem.get()), "selecting nothing");
+    }
+    write_dataset(g.get(), name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), sel, dxpl);
+  };
+  write_rows("numbers", fabric_numbers(fabric), 1);
+  Fabric copy = fabric;
+  for (auto& [name, curve] : curves_of(copy)) {
+    if (curve->empty()) continue;
+    std::vector<double> rows;
+    for (size_t k = 0; k < curve->q.size(); ++k) rows.insert(rows.end(), {curve->q[k], curve->f[k]});
+    write_rows(name, rows, 2);
+  }
+}
+
+void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, hid_t dxpl) {
+  Handle g = create_group(root, "state");
+  const int ni = c.grid.ni, nj = c.grid.nj;
+  const Selection s1 = select_blocks(owned, ni, nj, 1);
+  const Selection s2 = select_blocks(owned, ni, nj, 2);
+  const Selection s3 = select_blocks(owned, ni, nj, 3);
+  const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c8 = H5T_NATIVE_UINT8;
+  write_dataset(g.get(), "positions", f64, d, c.x(), s3, dxpl);
+  write_dataset(g.get(), "tension", f64, d, c.tension(), s2, dxpl);
+  write_dataset(g.get(), "moment", f64, d, c.moment(), s2, dxpl);
+  write_dataset(g.get(), "shear", f64, d, c.shear(), s1, dxpl);
+  write_dataset(g.get(), "x1", f64, d, c.x1.data(), s3, dxpl);
+  write_dataset(g.get(), "x2", f64, d, c.x2.data(), s3, dxpl);
+  write_dataset(g.get(), "flags", u8, c8, c.flags.data(), s1, dxpl);
+  write_dataset(g.get(), "level", u8, c8, c.level.data(), s1, dxpl);
+}
+
+// Pushes a file's data to the disk before it is renamed into place.
+void sync_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw std::runtime_error("cannot open " + path + " to flush it");
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) throw std::runtime_error("cannot flush " + path + " to disk");
+}
+
+}  // namespace
+
+void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
+                      const std::vector<Block>& owned, const std::string& scene_toml,
+                      const Fabric& fabric, const RunCounters& counters) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const std::string path = dir + "/checkpoint.h5", tmp = path + ".tmp";
+  uint64_t local = state_sum(cloth, owned), total = 0;
+  MPI_Allreduce(&local, &total, 1, MPI_UINT64_T, MPI_SUM, comm);
+  const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters));
+
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  {
+    Handle fapl = make_plist(H5P_FILE_ACCESS, "creating a file access property list");
+    check_status(H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL), "selecting the MPI-IO driver");
+    check_status(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18),
+                 "setting the file format version");
+    Handle file(check(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
+                      "cannot create " + tmp),
+                H5Fclose);
+    Handle dxpl = make_plist(H5P_DATASET_XFER, "creating a transfer property list");
+    check_status(H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE), "requesting collective I/O");
+    const hid_t root = file.get();
+    put_string(root, "format", kFormat);
+    put_int(root, "format_version", kFormatVersion);
+    put_string(root, "drape_version", DRAPE_VERSION);
+    put_int(root, "ni", cloth.grid.ni);
+    put_int(root, "nj", cloth.grid.nj);
+    put_int(root, "step", cloth.step);
+    put_double(root, "time", cloth.time);
+    put_double(root, "dt", cloth.dt);
+    put_double(root, "dt_prev", cloth.dt_prev);
+    put_string(root, "scene_toml", scene_toml);
+    const std::vector<double> cn = counter_numbers(counters);
+    put_numbers(root, "counters", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, cn.data(), cn.size());
+    put_string(root, "digest", hex(digest));
+    write_state(root, cloth, owned, dxpl.get());
+    write_fabric(root, fabric, rank, dxpl.get());
+    dxpl.reset();
+    file.close("closing " + tmp);  // collective: every rank's blocks are in
+  }
+  // Rank 0 makes it durable and publishes it; the others learn the outcome.
+  char error[512] = {0};
+  if (rank == 0) {
+    try {
+      sync_file(tmp);
+      if (std::rename(tmp.c_str(), path.c_str()) != 0)
+        throw std::runtime_error("cannot rename " + tmp + " to " + path);
+    } catch (const std::exception& e) {
+      std::snprintf(error, sizeof error, "%s", e.what());
+      std::remove(tmp.c_str());
+    }
+  }
+  MPI_Bcast(error, sizeof error, MPI_CHAR, 0, comm);
+  if (error[0]) throw std::runtime_error(std::string("checkpoint: ") + error);
+}
+
+// ------------------------------------------------------------- reading --
+
+namespace {
+
+Fabric read_fabric(hid_t root) {
+  if (H5Lexists(root, "fabric", H5P_DEFAULT) <= 0) fail("group 'fabric' is missing");
+  Handle g(check(H5Gopen2(root, "fabric", H5P_DEFAULT), "opening group 'fabric'"), H5Gclose);
+  Fabric f;
+  f.name = get_string(g.get(), "name");
+  f.source = get_string(g.get(), "source");
+  std::vector<double> v(fabric_numbers(f).size());
+  read_dataset(g.get(), "numbers", H5T_NATIVE_DOUBLE, v.data(), v.size());
+  size_t k = 0;
+  f.density = v[k++];
+  f.thickness = v[k++];
+  for (TensileKES& t : f.tensile) {
+    t.emt = v[k++];
+    t.lt = v[k++];
+    t.rt = v[k++];
+    t.fm = v[k++];
+  }
+  for (BendingKES& b : f.bending) {
+    b.b = v[k++];
+    b.hb = v[k++];
+  }
+  f.shear.g = v[k++];
+  f.shear.hg = v[k++];
+  for (auto& [name, curve] : curves_of(f)) {
+    if (H5Lexists(g.get(), name.c_str(), H5P_DEFAULT) <= 0) continue;
+    Handle ds(check(H5Dopen2(g.get(), name.c_str(), H5P_DEFAULT), "opening " + name), H5Dclose);
+    Handle space(check(H5Dget_space(ds.get()), "reading a dataspace"), H5Sclose);
+    const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+    if (n <= 0 || n % 2 != 0) fail("curve '" + name + "' is not a list of (q, f) pairs");
+    std::vector<double> rows(size_t(n), 0.0);
+    read_dataset(g.get(), name, H5T_NATIVE_DOUBLE, rows.data(), hsize_t(n));
+    for (size_t r = 0; r < rows.size(); r += 2) {
+      curve->q.push_back(rows[r]);
+      curve->f.push_back(rows[r + 1]);
+    }
+  }
+  return f;
+}
+
+void read_state(hid_t root, Cloth& c) {
+  if (H5Lexists(root, "state", H5P_DEFAULT) <= 0) fail("group 'state' is missing");
+  Handle g(check(H5Gopen2(root, "state", H5P_DEFAULT), "opening group 'state'"), H5Gclose);
+  const int64_t n = c.grid.n();
+  c.layout.n = n;
+  c.z.assign(c.layout.size(), 0.0);
+  c.x1.assign(3 * n, 0.0);
+  c.x2.assign(3 * n, 0.0);
+  c.flags.assign(n, 0);
+  c.level.assign(n, 0);
+  const hid_t d = H5T_NATIVE_DOUBLE, u8 = H5T_NATIVE_UINT8;
+  read_dataset(g.get(), "positions", d, c.x(), 3 * n);
+  read_dataset(g.get(), "tension", d, c.tension(), 2 * n);
+  read_dataset(g.get(), "moment", d, c.moment(), 2 * n);
+  read_dataset(g.get(), "shear", d, c.shear(), n);
+  read_dataset(g.get(), "x1", d, c.x1.data(), 3 * n);
+  read_dataset(g.get(), "x2", d, c.x2.data(), 3 * n);
+  read_dataset(g.get(), "flags", u8, c.flags.data(), n);
+  read_dataset(g.get(), "level", u8, c.level.data(), n);
+}
+
+CheckpointState read_verified(const std::string& path) {
+  CheckpointState ck;
+  ck.path = path;
+  Handle file(check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
+                    "cannot be opened as HDF5 (truncated or damaged?)"),
+              H5Fclose);
+  const hid_t root = file.get();
+  if (!has_attribute(root, "format") || get_string(root, "format") != kFormat)
+    throw InputError("is an HDF5 file but not a drape checkpoint (no format = \"" +
+                     std::string(kFormat) + "\" attribute; drape.h5 outputs cannot be restarted from)");
+  const int64_t version = get_int(root, "format_version");
+  if (version != kFormatVersion)
+    throw InputError("has checkpoint format version " + std::to_string(version) + "; this drape reads version " +
+                     std::to_string(kFormatVersion));
+  const int64_t ni = get_int(root, "ni"), nj = get_int(root, "nj"), step = get_int(root, "step");
+  if (ni < 3 || nj < 3 || ni * nj > INT32_MAX || step < 0)
+    throw InputError("holds an impossible grid " + std::to_string(ni) + " x " + std::to_string(nj) +
+                     " or step " + std::to_string(step));
+  Cloth& c = ck.cloth;
+  c.grid.ni = int(ni);
+  c.grid.nj = int(nj);
+  c.step = int(step);
+  c.time = get_double(root, "time");
+  c.dt = get_double(root, "dt");
+  c.dt_prev = get_double(root, "dt_prev");
+  if (!(c.dt > 0) || !(c.dt_prev > 0) || !std::isfinite(c.time))
+    throw InputError("holds an impossible time " + std::to_string(c.time) + " or time step");
+  ck.scene_toml = get_string(root, "scene_toml");
+  std::vector<double> cn(counter_numbers(RunCounters{}).size());
+  get_numbers(root, "counters", H5T_NATIVE_DOUBLE, cn.data(), cn.size());
+  ck.counters = counters_from(cn);
+  read_state(root, c);
+  ck.fabric = read_fabric(root);
+  const uint64_t digest = Hasher::mix(state_sum(c, {Block{0, c.grid.ni, 0, c.grid.nj}}) ^
+                                      meta_hash(c, ck.scene_toml, ck.fabric, ck.counters));
+  if (hex(digest) != get_string(root, "digest"))
+    throw InputError("its contents do not match its digest (the file is damaged)");
+  return ck;
+}
+
+}  // namespace
+
+CheckpointState read_checkpoint(const std::string& path) {
+  const std::string where = "checkpoint " + path + ": ";
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(where + "is a directory; name the file, e.g. " + path + "/checkpoint.h5");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(where + "no such file");
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (H5Fis_hdf5(path.c_str()) <= 0)
+    throw InputError(where + "not an HDF5 file (truncated, damaged or foreign)");
+  try {
+    return read_verified(path);
+  } catch (const InputError& e) {
+    throw InputError(where + e.what());
+  } catch (const std::exception& e) {
+    throw InputError(where + e.what());
+  }
+}
+
+void restore_state(const CheckpointState& ck, Cloth& cloth) {
+  const Cloth& s = ck.cloth;
+  if (s.grid.ni != cloth.grid.ni || s.grid.nj != cloth.grid.nj)
+    throw InputError("checkpoint " + ck.path + ": its grid does not match the scene's");
+  cloth.z = s.z;
+  cloth.x1 = s.x1;
+  cloth.x2 = s.x2;
+  cloth.flags = s.flags;
+  cloth.level = s.level;
+  cloth.step = s.step;
+  cloth.time = s.time;
+  cloth.dt = s.dt;
+  cloth.dt_prev = s.dt_prev;
+}
+
+}  // namespace drape

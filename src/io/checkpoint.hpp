@@ -1,0 +1,65 @@
+#pragma once
+// Checkpoints: DIR/checkpoint.h5 holds the whole state of a run between two
+// time steps, in global particle order, so that `drape --restart` continues
+// it bit for bit on any number of ranks and threads.
+//
+// Layout of checkpoint.h5
+//   /            attributes: format = "drape checkpoint", format_version,
+//                drape_version, ni, nj, step, time, dt, dt_prev, scene_toml,
+//                counters (RunCounters), digest (see below)
+//   /state/      positions, tension, moment, shear (the unknowns z), x1, x2
+//                (the step history), flags, level: (NI x NJ [x C]) arrays
+//   /fabric/     attributes name, source; dataset numbers (KES values, SI);
+//                one (n x 2) dataset per measured curve
+//
+// The digest hashes every particle's values with its global id together with
+// the scalars, scene and fabric; reading recomputes it, so a damaged or
+// truncated file is refused rather than restarted from.
+//
+// Writing is collective: each rank writes the blocks it owns into
+// checkpoint.h5.tmp, which is flushed to disk and then renamed over the
+// previous checkpoint, so a complete checkpoint is always on disk.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io/frame.hpp"
+#include "solver/cloth.hpp"
+#include "solver/fabric.hpp"
+
+namespace drape {
+
+// What the driver carries from step to step besides the cloth.
+struct RunCounters {
+  int64_t iterations = 0, evaluations = 0, projections = 0;
+  int64_t max_step_iterations = 0, unconverged = 0;
+  int64_t calm = 0;               // consecutive steps below the rest speed
+  double dt_min = 1e300, dt_max = 0;
+  double cg_first_step = 1.0;     // nonlinear CG's carried first trial step
+};
+
+struct CheckpointState {
+  std::string path;
+  std::string scene_toml;
+  Fabric fabric;
+  RunCounters counters;
+  // Grid, unknowns, history, flags, levels, step, time, dt, dt_prev; the
+  // rest of the cloth is rebuilt from the scene and the flags.
+  Cloth cloth;
+};
+
+// Collective over `comm`. `owned`: the blocks this rank writes.
+void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
+                      const std::vector<Block>& owned, const std::string& scene_toml,
+                      const Fabric& fabric, const RunCounters& counters);
+
+// Reads and verifies a checkpoint on this rank alone. Throws InputError
+// naming the file and what is wrong with it.
+CheckpointState read_checkpoint(const std::string& path);
+
+// Copies a checkpoint's state into a cloth made for the same scene.
+void restore_state(const CheckpointState& ck, Cloth& cloth);
+
+}  // namespace drape

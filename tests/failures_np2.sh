@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Failures lose no work: a rank killed with SIGKILL ends mpirun promptly with
+# a non-zero status and leaves a checkpoint that restarts; a numerical failure
+# (NaN injected on purpose) ends with exit 3 naming the step, and the last
+# good checkpoint stays intact and restartable. No temporary file is left.
+# Usage: failures_np2.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
+set -euo pipefail
+drape=$1 mpiexec=$2 src=$3 work=$4
+rm -rf "$work" && mkdir -p "$work"
+scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[25,25]" --set output.every=5
+       --set output.picture=false --quiet)
+no_tmp() { ! ls "$1"/*.tmp >/dev/null 2>&1 || { echo "FAIL: temporary files left in $1"; ls "$1"; exit 1; }; }
+
+# kill -9 of one rank in a 2-rank run.
+OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set solver.steps=100000 \
+  --set output.checkpoint_every=2 --output "$work/kill" > "$work/kill.out" 2>&1 &
+mpi=$!
+for _ in $(seq 600); do [[ -e $work/kill/checkpoint.h5 ]] && break; sleep 0.05; done
+[[ -e $work/kill/checkpoint.h5 ]] || { echo "FAIL: no checkpoint appeared"; exit 1; }
+victim=$(pgrep -P "$mpi" | head -1)
+[[ -n $victim ]] || { echo "FAIL: no rank process found under mpiexec $mpi"; exit 1; }
+start=$SECONDS
+kill -KILL "$victim"
+status=0
+for _ in $(seq 600); do kill -0 "$mpi" 2>/dev/null || break; sleep 0.1; done
+if kill -0 "$mpi" 2>/dev/null; then
+  kill -KILL "$mpi"; echo "FAIL: mpiexec still running 60 s after a rank was killed"; exit 1
+fi
+wait "$mpi" || status=$?
+[[ $status != 0 ]] || { echo "FAIL: mpiexec exited 0 after a rank was killed"; exit 1; }
+echo "ok mpiexec ended $((SECONDS - start)) s after kill -9, status $status"
+step=$("$drape" --restart "$work/kill/checkpoint.h5" --dry-run | sed -n 's/.* at step \([0-9]*\)$/\1/p')
+OMP_NUM_THREADS=1 "$drape" --restart "$work/kill/checkpoint.h5" --set solver.steps=$((step + 3)) \
+  --output "$work/kill-continued" --quiet
+grep -q "\"steps\": $((step + 3))," "$work/kill-continued/report.json" || { echo "FAIL: restart after kill -9"; exit 1; }
+echo "ok the checkpoint of step $step restarts"
+
+# NaN at step 12 with checkpoints every 5 steps.
+status=0
+DRAPE_FAULT_NAN_STEP=12 OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set solver.steps=40 \
+  --set output.checkpoint_every=5 --output "$work/nan" > "$work/nan.out" 2>&1 || status=$?
+cat "$work/nan.out"
+[[ $status == 3 ]] || { echo "FAIL: exit status $status, expected 3"; exit 1; }
+grep -q "drape: error: numerical failure at step 12, iteration" "$work/nan.out" ||
+  { echo "FAIL: the message does not name step 12"; exit 1; }
+[[ $(grep -c "drape: error:" "$work/nan.out") == 1 ]] || { echo "FAIL: not one message"; exit 1; }
+"$drape" --restart "$work/nan/checkpoint.h5" --dry-run | grep -q "at step 10$" ||
+  { echo "FAIL: the last good checkpoint (step 10) is not intact"; exit 1; }
+no_tmp "$work/nan"
+OMP_NUM_THREADS=1 "$drape" --restart "$work/nan/checkpoint.h5" --set solver.steps=14 --output "$work/nan-continued" --quiet
+echo "ok NaN at step 12: exit 3, checkpoint of step 10 intact and restartable"
