@@ -48,7 +48,7 @@ World random_world(unsigned seed) {
   return w;
 }
 
-double term_cost(World& w, const std::vector<double>& z) {
+double term_cost(World& w, std::vector<double>& z) {
   return w.loop->evaluator().evaluate(z.data(), nullptr).total();
 }
 

@@ -26,15 +26,30 @@ void build_one(const Tiling& tiling, const std::vector<int>& owned, int per_part
   list.tile_begin[owned.size()] = int64_t(list.items.size());
 }
 
+template <class Pred>
+void build_ring(const std::vector<int64_t>& ring, int per_particle, Pred on, ActiveList& list) {
+  list.items.clear();
+  for (int64_t p : ring)
+    for (int d = 0; d < per_particle; ++d)
+      if (on(per_particle * p + d)) list.items.push_back(per_particle * p + d);
+  list.tile_begin = {0, int64_t(list.items.size())};
+}
+
 }  // namespace
 
 void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned,
-                        ActiveLists& out) {
+                        ActiveLists& out, const std::vector<int64_t>& ring) {
   out.tiles = owned;
+  auto edge = [&](int64_t s) { return c.edge_on[s] != 0; };
+  auto triple = [&](int64_t s) { return c.triple_on[s] != 0; };
+  auto shear = [&](int64_t s) { return c.shear_on[s] != 0; };
   build_one(tiling, owned, 1, [&](int64_t p) { return c.free(p); }, out.particles);
-  build_one(tiling, owned, 2, [&](int64_t s) { return c.edge_on[s] != 0; }, out.edges);
-  build_one(tiling, owned, 2, [&](int64_t s) { return c.triple_on[s] != 0; }, out.triples);
-  build_one(tiling, owned, 1, [&](int64_t s) { return c.shear_on[s] != 0; }, out.shears);
+  build_one(tiling, owned, 2, edge, out.edges);
+  build_one(tiling, owned, 2, triple, out.triples);
+  build_one(tiling, owned, 1, shear, out.shears);
+  build_ring(ring, 2, edge, out.ring_edges);
+  build_ring(ring, 2, triple, out.ring_triples);
+  build_ring(ring, 1, shear, out.ring_shears);
 }
 
 void rebuild_topology(Cloth& c, bool shear_enabled) {

@@ -24,12 +24,17 @@ struct ActiveLists {
   ActiveList triples;    // triple slots 2p+d
   ActiveList shears;     // shear slots p
   std::vector<int> tiles;  // the tiles this rank owns, ascending
+  // Elements of the ghost ring (other ranks' tiles, one particle around this
+  // rank's): computed here too, because this rank's particles gather their
+  // contributions; their cost belongs to their owner. One run, no tiles.
+  ActiveList ring_edges, ring_triples, ring_shears;
 };
 
 // Builds the lists over `owned_tiles` (ascending tile ids) from the cloth's
-// flags and element switches. Reuses the lists' capacity.
+// flags and element switches, and the ring lists over `ring` (ascending
+// particle ids, none on one rank). Reuses the lists' capacity.
 void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned_tiles,
-                        ActiveLists& out);
+                        ActiveLists& out, const std::vector<int64_t>& ring = {});
 
 // Rebuilds next/prev neighbour tables and element switches from particle
 // flags: an edge joins consecutive active particles on a grid line, a triple

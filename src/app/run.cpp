@@ -17,6 +17,8 @@
 
 #include "amrc/active_lists.hpp"
 #include "decomp/collective.hpp"
+#include "decomp/decomposition.hpp"
+#include "decomp/gather.hpp"
 #include "app/progress.hpp"
 #include "app/signals.hpp"
 #include "io/error.hpp"
@@ -91,6 +93,32 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) 
   return t;
 }
 
+// The decomposition's figures over all ranks (DESIGN §3, issue 5's targets).
+struct DecompStats {
+  int tiles = 0, tile = 0;
+  double imbalance = 1;
+  int64_t edge_cut = 0, ghosts = 0, halo_bytes = 0, exchanges = 0;
+  double halo_seconds = 0, reduction_seconds = 0;  // the largest over ranks
+};
+
+DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {
+  DecompStats s;
+  s.tiles = tl.count();
+  s.tile = tl.t;
+  s.imbalance = d.partition.imbalance;
+  s.edge_cut = d.partition.edge_cut;
+  int64_t mine[2] = {d.halo ? d.halo->ghosts() : 0, d.halo ? d.halo->bytes : 0}, all[2];
+  MPI_Allreduce(mine, all, 2, MPI_INT64_T, MPI_SUM, comm);
+  s.ghosts = all[0];
+  s.halo_bytes = all[1];
+  s.exchanges = d.halo ? d.halo->exchanges : 0;
+  double secs[2] = {d.halo_seconds(), d.reduction_seconds()}, most[2];
+  MPI_Allreduce(secs, most, 2, MPI_DOUBLE, MPI_MAX, comm);
+  s.halo_seconds = most[0];
+  s.reduction_seconds = most[1];
+  return s;
+}
+
 struct Summary {
   RunCounters counters;  // carried across restarts
   bool at_rest = false;
@@ -100,6 +128,7 @@ struct Summary {
   std::string checkpoint;  // the last checkpoint written, "" if none
   Table2 table2;
   StepStats last;
+  DecompStats decomp;
 };
 
 double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red) {
@@ -160,6 +189,18 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("speedup", s.table2.speedup)
       .end_object();
   j.value("ranks", ranks);
+  const DecompStats& d = s.decomp;
+  j.begin_object("decomposition")
+      .value("tiles", d.tiles)
+      .value("tile", d.tile)
+      .value("imbalance", d.imbalance)
+      .value("edge_cut", (long long)d.edge_cut)
+      .value("ghosts", (long long)d.ghosts)
+      .value("halo_exchanges", (long long)d.exchanges)
+      .value("halo_bytes", (long long)d.halo_bytes)
+      .value("halo_seconds", d.halo_seconds)
+      .value("reduction_seconds", d.reduction_seconds)
+      .end_object();
   j.value("threads", threads);
   j.value("schedule", to_string(scene.parallel.schedule));
   j.value("gradient", to_string(scene.solver.gradient));
@@ -174,11 +215,18 @@ void print_table2(const Table2& t, int threads) {
               threads, t.time, t.sequential, t.parallel, t.speedup);
 }
 
-void print_timing_table(const Timers& tm, double wall, const std::string& checksum) {
+void print_timing_table(const Timers& tm, double wall, const std::string& checksum, const DecompStats& d,
+                        int ranks) {
   std::printf("\n%-16s %12s %8s\n", "phase", "seconds", "share");
   for (int p = 0; p < kPhases; ++p)
     std::printf("%-16s %12.3f %7.1f%%\n", phase_name(p), tm.seconds[p],
                 wall > 0 ? 100.0 * tm.seconds[p] / wall : 0.0);
+  if (ranks > 1) {  // inside the phases above; the largest over ranks
+    std::printf("%-16s %12.3f %7.1f%%   (within the phases)\n", "  halo exchange", d.halo_seconds,
+                wall > 0 ? 100.0 * d.halo_seconds / wall : 0.0);
+    std::printf("%-16s %12.3f %7.1f%%   (within the phases)\n", "  reductions", d.reduction_seconds,
+                wall > 0 ? 100.0 * d.reduction_seconds / wall : 0.0);
+  }
   std::printf("%-16s %12.3f\n", "wall", wall);
   std::printf("state checksum   %s\n", checksum.c_str());
   std::fflush(stdout);
@@ -200,14 +248,6 @@ void inject_nan(Cloth& c, const ActiveLists& lists) {
     }
 }
 
-void refuse_more_ranks_than_tiles(const Scene& scene, int ranks) {
-  const Tiling t(scene.cloth.particles[0], scene.cloth.particles[1], scene.cloth.tile);
-  if (ranks > t.count())
-    throw InputError("MPI: " + std::to_string(ranks) + " ranks but the cloth has only " +
-                     std::to_string(t.count()) + " tile(s) (cloth.tile = " + std::to_string(scene.cloth.tile) +
-                     "): run at most " + std::to_string(t.count()) + " ranks or set a smaller cloth.tile");
-}
-
 void add_step(RunCounters& n, const StepStats& st) {
   n.iterations += st.iterations;
   n.evaluations += st.evaluations;
@@ -223,21 +263,19 @@ void add_step(RunCounters& n, const StepStats& st) {
 int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm) {
   const auto t0 = std::chrono::steady_clock::now();
   const int rank = rank_of(comm), ranks = size_of(comm);
-  refuse_more_ranks_than_tiles(scene, ranks);
+  if (ranks > 1 && scene.solver.gradient == GradientMode::Numeric)
+    throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
+                     "reach beyond the ghost particles); run it without mpirun");
   if (scene.parallel.threads > 0) omp_set_num_threads(scene.parallel.threads);
   const int threads = omp_get_max_threads();
   const bool talk = rank == 0 && !opt.quiet;
-  make_output_dir(opt.output_dir, comm, rank);
-  if (talk && ranks > 1)
-    std::printf("note: tile decomposition across ranks is not built yet; %d ranks replicate the "
-                "work and write one file together\n", ranks);
 
   Timers tm;
   Cloth cloth;
   Model model;
   Tiling tiling;
   ActiveLists lists;
-  std::vector<int> owned;
+  Decomposition dec;
   Summary sum;
   int last_frame = -1;  // the step of the last frame written (-1: none yet)
   {
@@ -252,22 +290,24 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
-    for (int t = 0; t < tiling.count(); ++t) owned.push_back(t);
+    dec = decompose(cloth, tiling, comm);  // refuses more ranks than tiles
   }
+  make_output_dir(opt.output_dir, comm, rank);
   {
     ScopedPhase ph(tm, kLists);
-    build_active_lists(cloth, tiling, owned, lists);
+    build_active_lists(cloth, tiling, dec.owned, lists, dec.halo ? dec.halo->ring() : std::vector<int64_t>{});
   }
-  // Every rank holds every tile until the decomposition lands (issue 5), so
-  // sums must not add ranks together: each rank reduces on its own, and all
-  // get the same bits.
-  LocalReducer red;
+  const std::vector<int>& owned = dec.owned;
+  const Reducer& red = *dec.reducer;
   LoopPolicy policy{scene.parallel.schedule, scene.parallel.chunk};
-  TimeLoop loop(cloth, model, lists, tiling, policy, red, scene.solver);
+  TimeLoop loop(cloth, model, lists, tiling, policy, red, scene.solver, dec.ghosts());
   if (opt.restart) loop.minimizer().set_first_step(opt.restart->counters.cg_first_step);
-  // Replicated work: rank 0 writes every block, the others join with none.
+  // Each rank writes its own tiles' blocks of every collective file.
   std::vector<Block> blocks;
-  if (rank == 0) blocks.push_back({0, cloth.grid.ni, 0, cloth.grid.nj});
+  for (int t : owned) {
+    const TileRange r = tiling.range(t);
+    blocks.push_back({r.i0, r.i1, r.j0, r.j1});
+  }
 
   std::unique_ptr<Hdf5Output> h5;
   {
@@ -285,6 +325,11 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     std::printf("drape %s: %s, %d x %d particles (%lld free), fabric %s, %d rank(s) x %d thread(s)\n",
                 DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
                 (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
+    if (ranks > 1)
+      std::printf("tiles: %d of %d x %d particles, METIS over %d ranks: imbalance %.3f, edge cut %lld, "
+                  "rank 0 has %lld ghosts from %d neighbour(s)\n",
+                  tiling.count(), scene.cloth.tile, scene.cloth.tile, ranks, dec.partition.imbalance,
+                  (long long)dec.partition.edge_cut, (long long)dec.halo->ghosts(), dec.halo->neighbours());
     if (opt.restart)
       std::printf("continuing %s from step %d (t = %.6g s)\n", opt.restart->path.c_str(), cloth.step,
                   cloth.time);
@@ -350,12 +395,14 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   sum.table2 = table2(clock0, loop_clock(),
                       std::chrono::duration<double>(std::chrono::steady_clock::now() - stepping0).count(),
                       threads);
+  sum.decomp = decomp_stats(dec, tiling, comm);
   const double depth = max_penetration(cloth, model, lists, red);
   const Checksum ck = state_checksum(cloth, tiling, owned, red);
   {
     ScopedPhase ph(tm, kOutput);
     if (cloth.step != last_frame) h5->write_frame(frame_of(cloth, blocks));  // the final state
     h5->finish();
+    if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
     if (rank == 0 && scene.output.picture)
       render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png");
   }
@@ -366,7 +413,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                                       depth, loop.free_particles()));
     if (!opt.quiet) {
       progress.finish(sum.at_rest, depth);
-      print_timing_table(tm, wall, ck.hex());
+      print_timing_table(tm, wall, ck.hex(), sum.decomp, ranks);
       print_table2(sum.table2, threads);
     }
   }

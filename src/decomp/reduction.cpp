@@ -8,6 +8,7 @@ MpiReducer::MpiReducer(MPI_Comm comm, int total_tiles) : comm_(comm), tiles_(tot
 
 void MpiReducer::sum_tiles(const std::vector<int>& owned, const double* partials, int k,
                            double* out) const {
+  const double t0 = MPI_Wtime();
   global_.assign(size_t(k) * tiles_, 0.0);
   const size_t n = owned.size();
   for (int r = 0; r < k; ++r)
@@ -18,10 +19,13 @@ void MpiReducer::sum_tiles(const std::vector<int>& owned, const double* partials
     for (int t = 0; t < tiles_; ++t) s += global_[size_t(r) * tiles_ + t];
     out[r] = s;
   }
+  seconds += MPI_Wtime() - t0;
 }
 
 double MpiReducer::max(double v) const {
+  const double t0 = MPI_Wtime();
   MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_DOUBLE, MPI_MAX, comm_);
+  seconds += MPI_Wtime() - t0;
   return v;
 }
 

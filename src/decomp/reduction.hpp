@@ -18,6 +18,8 @@ class MpiReducer : public Reducer {
   uint64_t sum_u64(uint64_t v) const override;
   int64_t sum_i64(int64_t v) const override;
 
+  mutable double seconds = 0;  // in sum_tiles and max, this rank
+
  private:
   MPI_Comm comm_;
   int tiles_;

@@ -40,7 +40,7 @@ double Minimizer::dot(const double* a, const double* b) {
   return out;
 }
 
-CostTerms Minimizer::eval(Evaluator& ev, const double* z, double* g, bool numeric) {
+CostTerms Minimizer::eval(Evaluator& ev, double* z, double* g, bool numeric) {
   return numeric ? ev.numeric_gradient(z, g) : ev.evaluate(z, g);
 }
 

@@ -48,7 +48,7 @@ class Minimizer {
   double dot(const double* a, const double* b);
 
  private:
-  CostTerms eval(Evaluator& ev, const double* z, double* g, bool numeric);
+  CostTerms eval(Evaluator& ev, double* z, double* g, bool numeric);
 
   const Cloth& c_;
   const ActiveLists& lists_;

@@ -19,8 +19,9 @@ inline void put(double* out, const V& v, double s) {
 }  // namespace
 
 Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists,
-                     const Tiling& tiling, const LoopPolicy& policy, const Reducer& reducer)
-    : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer) {
+                     const Tiling& tiling, const LoopPolicy& policy, const Reducer& reducer,
+                     const Halo& halo)
+    : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer), halo_(halo) {
   const int64_t n = cloth.grid.n();
   buf_e_.assign(2 * n * 6, 0.0);
   buf_t_.assign(2 * n * 9, 0.0);
@@ -230,25 +231,28 @@ CostTerms Evaluator::reduce_costs() {
   return {sums[0], sums[1], sums[2], sums[3]};
 }
 
-CostTerms Evaluator::evaluate(const double* z, double* grad) {
-  for_each_item(lists_.edges, pol_, [&](int64_t s) { edge_forces(s, z); });
-  for_each_item(lists_.triples, pol_, [&](int64_t s) { triple_forces(s, z); });
-  for_each_item(lists_.shears, pol_, [&](int64_t s) { shear_forces(s, z); });
+CostTerms Evaluator::evaluate(double* z, double* grad) {
+  halo_.exchange(z, Halo::kAll);
+  for_edges([&](int64_t s) { edge_forces(s, z); });
+  for_triples([&](int64_t s) { triple_forces(s, z); });
+  for_shears([&](int64_t s) { shear_forces(s, z); });
   for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_residual(p, z); });
   const CostTerms cost = reduce_costs();
   if (!grad) return cost;
+  halo_.exchange_particles(rho_.data(), 3);
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });
-  for_each_item(lists_.edges, pol_, [&](int64_t s) { edge_gradient(s, z, grad); });
-  for_each_item(lists_.triples, pol_, [&](int64_t s) { triple_gradient(s, z, grad); });
-  for_each_item(lists_.shears, pol_, [&](int64_t s) { shear_gradient(s, z, grad); });
+  for_edges([&](int64_t s) { edge_gradient(s, z, grad); });
+  for_triples([&](int64_t s) { triple_gradient(s, z, grad); });
+  for_shears([&](int64_t s) { shear_gradient(s, z, grad); });
   for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_gradient(p, z, grad); });
   return cost;
 }
 
 // ---- diagonal scaling -----------------------------------------------------
 
-void Evaluator::scaling_diagonal(const double* z, double* diag) {
+void Evaluator::scaling_diagonal(double* z, double* diag) {
+  halo_.exchange(z, Halo::kAll);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { diag[k] = 1.0; });
@@ -264,7 +268,7 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     return std::sqrt(r * r + mu * stop * stop);
   };
   auto outside = [](const Band& b, double f, double q) { return b.excess(f, q).r != 0 ? 1.0 : 0.0; };
-  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+  for_edges([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t q = c_.next[d][p];
@@ -277,7 +281,7 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     const double nf = double(c_.free(p)) + double(c_.free(q));
     diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
   });
-  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+  for_triples([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
@@ -298,7 +302,7 @@ void Evaluator::scaling_diagonal(const double* z, double* diag) {
     diag[c_.layout.moment() + s] =
         (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
-  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+  for_shears([&](int64_t s) {
     const int64_t ids[3] = {s, c_.next[0][s], c_.next[1][s]};
     V g[3];
     const double phi = shear_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), g);
@@ -362,7 +366,7 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
   return sum;
 }
 
-CostTerms Evaluator::numeric_gradient(const double* z, double* grad) {
+CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   const CostTerms cost = evaluate(z, nullptr);
   const int64_t nz = c_.layout.size();
   zwork_.assign(z, z + nz);

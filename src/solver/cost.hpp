@@ -16,6 +16,7 @@
 
 #include "amrc/active_lists.hpp"
 #include "solver/cloth.hpp"
+#include "solver/halo.hpp"
 #include "solver/loops.hpp"
 #include "solver/model.hpp"
 #include "solver/reducer.hpp"
@@ -30,19 +31,24 @@ struct CostTerms {
 class Evaluator {
  public:
   Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists, const Tiling& tiling,
-            const LoopPolicy& policy, const Reducer& reducer);
+            const LoopPolicy& policy, const Reducer& reducer, const Halo& halo = no_halo());
+
+  // The entry points that take z first refresh its ghost entries (Halo);
+  // those that take a const z expect them current (z was last evaluated).
 
   // Cost at z; the gradient too if grad is non-null (entries of unknowns that
-  // are not free — fixed, inactive — are set to zero).
-  CostTerms evaluate(const double* z, double* grad);
+  // are not free — fixed, inactive — are set to zero; entries owned by other
+  // ranks are not meaningful).
+  CostTerms evaluate(double* z, double* grad);
 
   // Reference gradient by central differences, unknown by unknown, each from
   // the cost of the patch of the mesh it can change (the paper's approach).
-  CostTerms numeric_gradient(const double* z, double* grad);
+  // One rank only (its windows reach further than the ghost ring).
+  CostTerms numeric_gradient(double* z, double* grad);
 
   // Approximate diagonal of J^T J (cost = 1/2 |residuals|^2): the diagonal
   // scaling of the unknowns. Entries of non-unknowns are set to 1.
-  void scaling_diagonal(const double* z, double* diag);
+  void scaling_diagonal(double* z, double* diag);
 
   // --- the Newton solver's view (src/solver/stiffness.cpp) ---
   // Sets every active element force to its hysteresis target (Band::stop) at
@@ -53,7 +59,7 @@ class Evaluator {
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
   // left out so that K stays positive definite). x entries only; others 0.
-  void stiffness_product(const double* z, const double* v, double* kv);
+  void stiffness_product(const double* z, double* v, double* kv);
   // Its diagonal (per position unknown; 1 elsewhere).
   void stiffness_diagonal(const double* z, double* diag);
 
@@ -74,6 +80,19 @@ class Evaluator {
   void triple_gradient(int64_t s, const double* z, double* grad);
   void shear_gradient(int64_t s, const double* z, double* grad);
   void particle_gradient(int64_t p, const double* z, double* grad);
+  // Element passes: this rank's elements, then the ghost ring's (split in
+  // equal chunks whatever the schedule: the ring has no tiles).
+  template <class F>
+  void for_elements(const ActiveList& owned, const ActiveList& ring, F&& f) {
+    for_each_item(owned, pol_, f);
+    if (ring.size() > 0) for_each_item(ring, LoopPolicy{Schedule::ActiveLists, 1}, f);
+  }
+  template <class F>
+  void for_edges(F&& f) { for_elements(lists_.edges, lists_.ring_edges, f); }
+  template <class F>
+  void for_triples(F&& f) { for_elements(lists_.triples, lists_.ring_triples, f); }
+  template <class F>
+  void for_shears(F&& f) { for_elements(lists_.shears, lists_.ring_shears, f); }
   template <class Add>
   void gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
               const std::vector<double>& s, Add&& add) const;
@@ -86,6 +105,7 @@ class Evaluator {
   const Tiling& tiling_;
   const LoopPolicy& pol_;
   const Reducer& red_;
+  const Halo& halo_;
   std::vector<double> buf_e_, buf_t_, buf_s_;     // per-slot contributions to particles (6, 9, 9)
   std::vector<double> cost_p_, cost_e_, cost_t_, cost_s_;
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot

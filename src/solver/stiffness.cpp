@@ -23,16 +23,17 @@ inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 }  // namespace
 
 void Evaluator::hysteresis_forces(double* z) {
+  halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();  // f1 is indexed from the tension block
-  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+  for_edges([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[2];
     const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
     z[L.tension() + s] = m_.stretch[d].stop(c_.f1[s], len / c_.edge_rest[s] - 1).f;
   });
-  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+  for_triples([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[3];
@@ -40,17 +41,18 @@ void Evaluator::hysteresis_forces(double* z) {
                                  load3<double>(&c_.bend_axis[3 * s]), g);
     z[L.moment() + s] = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th / c_.triple_rest[s]).f;
   });
-  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+  for_shears([&](int64_t s) {
     V g[3];
     const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
     z[L.shear() + s] = m_.shear.stop(c_.f1[L.shear() - fo + s], phi).f;
   });
 }
 
-void Evaluator::stiffness_product(const double* z, const double* v, double* kv) {
+void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
+  halo_.exchange(v, Halo::kPositions);
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+  for_edges([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V3<Dual> g[2];
@@ -61,7 +63,7 @@ void Evaluator::stiffness_product(const double* z, const double* v, double* kv) 
     for (int k = 0; k < 2; ++k)
       put(&buf_e_[6 * s + 3 * k], w * (tension * deriv_of(g[k]) + stiff * value_of(g[k])));
   });
-  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+  for_triples([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V3<Dual> g[3];
@@ -72,7 +74,7 @@ void Evaluator::stiffness_product(const double* z, const double* v, double* kv) 
     const double stiff = w * slope / Lm * th.d;
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * value_of(g[k]));
   });
-  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+  for_shears([&](int64_t s) {
     V3<Dual> g[3];
     const Dual phi = shear_angle(at(z, v, s), at(z, v, c_.next[0][s]), at(z, v, c_.next[1][s]), g);
     const double slope = m_.shear.stop(c_.f1[L.shear() - fo + s], phi.v).df_dq;
@@ -111,7 +113,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   parallel_for(nz, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: the diagonal of its stiffness block, in the
   // first entry of the particle's buffer slot, gathered below.
-  for_each_item(lists_.edges, pol_, [&](int64_t s) {
+  for_edges([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[2];
@@ -121,7 +123,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     for (int k = 0; k < 2; ++k)
       buf_e_[6 * s + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
   });
-  for_each_item(lists_.triples, pol_, [&](int64_t s) {
+  for_triples([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[3];
@@ -131,7 +133,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const double slope = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th / Lm).df_dq;
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   });
-  for_each_item(lists_.shears, pol_, [&](int64_t s) {
+  for_shears([&](int64_t s) {
     V g[3];
     const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
     const double slope = m_.shear.stop(c_.f1[L.shear() - fo + s], phi).df_dq;

@@ -10,9 +10,10 @@
 namespace drape {
 
 TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const Tiling& tiling,
-                   const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec)
-    : c_(cloth), m_(model), lists_(lists), red_(red), spec_(spec),
-      ev_(cloth, model, lists, tiling, policy, red), cg_(cloth, lists, tiling, red),
+                   const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec,
+                   const Halo& halo)
+    : c_(cloth), m_(model), lists_(lists), red_(red), halo_(halo), spec_(spec),
+      ev_(cloth, model, lists, tiling, policy, red, halo), cg_(cloth, lists, tiling, red),
       newton_(cloth, cg_) {
   z_saved_.assign(cloth.z.size(), 0.0);
   free_ = red.sum_i64(lists.particles.size());
@@ -154,6 +155,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   const double dt_start = c_.dt, first_step = cg_.first_step();
   std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
   std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.f1.begin());
+  halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
   freeze_bend_axes();
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;

@@ -29,7 +29,8 @@ struct StepStats {
 class TimeLoop {
  public:
   TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const Tiling& tiling,
-           const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec);
+           const LoopPolicy& policy, const Reducer& red, const SolverSpec& spec,
+           const Halo& halo = no_halo());
 
   // Advances one step, or leaves the cloth untouched if stopped (see
   // StepStats::stopped). Throws NumericalError on NaN/Inf or divergence.
@@ -57,6 +58,7 @@ class TimeLoop {
   Model& m_;
   const ActiveLists& lists_;
   const Reducer& red_;
+  const Halo& halo_;
   SolverSpec spec_;
   Evaluator ev_;
   Minimizer cg_;

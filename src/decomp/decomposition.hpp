@@ -1,0 +1,32 @@
+#pragma once
+// One rank's share of the cloth: the tiles METIS gives it, its ghosts, and
+// the reducer that sums over all ranks in tile order. With one rank: every
+// tile, no ghosts, a local reducer.
+#include <mpi.h>
+
+#include <memory>
+#include <vector>
+
+#include "decomp/halo_exchange.hpp"
+#include "decomp/partition.hpp"
+#include "decomp/reduction.hpp"
+
+namespace drape {
+
+struct Decomposition {
+  Partition partition;
+  std::vector<int> owned;  // this rank's tiles, ascending
+  std::unique_ptr<HaloExchange> halo;
+  std::unique_ptr<Reducer> reducer;
+  const MpiReducer* mpi_reducer = nullptr;  // its timing, when there is one
+
+  const Halo& ghosts() const { return halo ? static_cast<const Halo&>(*halo) : no_halo(); }
+  // Seconds in halo exchanges and in reductions on this rank.
+  double halo_seconds() const { return halo ? halo->seconds : 0.0; }
+  double reduction_seconds() const { return mpi_reducer ? mpi_reducer->seconds : 0.0; }
+};
+
+// Collective. Throws InputError for more ranks than tiles.
+Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm);
+
+}  // namespace drape

@@ -1,0 +1,110 @@
+#include "decomp/halo_exchange.hpp"
+
+#include <algorithm>
+#include <map>
+
+namespace drape {
+
+namespace {
+
+// Distinct owners of the particles in the (2w+1)^2 window around (i, j).
+void window_owners(const Tiling& tl, const std::vector<int>& owner, int i, int j, int w,
+                   std::vector<int>& out) {
+  out.clear();
+  const int i0 = std::max(0, i - w), i1 = std::min(tl.ni - 1, i + w);
+  const int j0 = std::max(0, j - w), j1 = std::min(tl.nj - 1, j + w);
+  // Tiles are rectangles: visiting the tiles the window overlaps suffices.
+  for (int ti = i0 / tl.t; ti <= i1 / tl.t; ++ti)
+    for (int tj = j0 / tl.t; tj <= j1 / tl.t; ++tj) {
+      const int r = owner[ti * tl.ntj + tj];
+      if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
+    }
+}
+
+}  // namespace
+
+HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_Comm comm, int width)
+    : comm_(comm), n_(int64_t(tl.ni) * tl.nj) {
+  int me = 0;
+  MPI_Comm_rank(comm, &me);
+  std::map<int, Peer> peers;
+  std::vector<int> near, close;
+  for (int i = 0; i < tl.ni; ++i)
+    for (int j = 0; j < tl.nj; ++j) {
+      // Inside a tile, away from its border, no other rank is near.
+      const int ii = i % tl.t, jj = j % tl.t;
+      const bool inner = ii >= width && ii < tl.t - width && jj >= width && jj < tl.t - width &&
+                         i + width < tl.ni && j + width < tl.nj;
+      if (inner) continue;
+      const int64_t p = int64_t(i) * tl.nj + j;
+      const int o = owner[tl.tile_of(i, j)];
+      window_owners(tl, owner, i, j, width, near);
+      if (o == me) {  // every other rank near p needs it
+        for (int r : near)
+          if (r != me) peers[r].send.push_back(p);
+      } else if (std::find(near.begin(), near.end(), me) != near.end()) {
+        peers[o].recv.push_back(p);
+        window_owners(tl, owner, i, j, 1, close);
+        if (std::find(close.begin(), close.end(), me) != close.end()) ring_.push_back(p);
+      }
+    }
+  for (auto& [r, peer] : peers) {
+    peer.rank = r;
+    peers_.push_back(std::move(peer));
+  }
+  sbuf_.resize(peers_.size());
+  rbuf_.resize(peers_.size());
+  req_.resize(2 * peers_.size());
+}
+
+int64_t HaloExchange::ghosts() const {
+  int64_t g = 0;
+  for (const Peer& p : peers_) g += int64_t(p.recv.size());
+  return g;
+}
+
+void HaloExchange::exchange(double* z, int blocks) const {
+  // Per particle: its 3 positions, then its 5 forces (z's blocks).
+  std::vector<Field> fields;
+  if (blocks & kPositions) fields.push_back({0, 3});
+  if (blocks & kForces) fields.insert(fields.end(), {{3 * n_, 2}, {5 * n_, 2}, {7 * n_, 1}});
+  run(z, fields);
+}
+
+void HaloExchange::exchange_particles(double* a, int per) const {
+  run(a, {{0, per}});
+}
+
+void HaloExchange::run(double* z, const std::vector<Field>& fields) const {
+  if (peers_.empty()) return;
+  const double t0 = MPI_Wtime();
+  int per = 0;
+  for (const Field& f : fields) per += f.per;
+  const int np = int(peers_.size());
+  const int tag = 0x4a10;
+  for (int k = 0; k < np; ++k) {
+    rbuf_[k].resize(peers_[k].recv.size() * per);
+    MPI_Irecv(rbuf_[k].data(), int(rbuf_[k].size()), MPI_DOUBLE, peers_[k].rank, tag, comm_, &req_[k]);
+  }
+  for (int k = 0; k < np; ++k) {
+    std::vector<double>& b = sbuf_[k];
+    b.resize(peers_[k].send.size() * per);
+    size_t u = 0;
+    for (int64_t p : peers_[k].send)
+      for (const Field& f : fields)
+        for (int c = 0; c < f.per; ++c) b[u++] = z[f.offset + f.per * p + c];
+    MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, peers_[k].rank, tag, comm_, &req_[np + k]);
+    bytes += int64_t(b.size() * sizeof(double));
+  }
+  MPI_Waitall(2 * np, req_.data(), MPI_STATUSES_IGNORE);
+  for (int k = 0; k < np; ++k) {
+    size_t u = 0;
+    for (int64_t p : peers_[k].recv)
+      for (const Field& f : fields)
+        for (int c = 0; c < f.per; ++c) z[f.offset + f.per * p + c] = rbuf_[k][u++];
+  }
+  ++exchanges;
+  seconds += MPI_Wtime() - t0;
+}
+
+}  // namespace drape

@@ -1,0 +1,36 @@
+#pragma once
+// The tile graph partitioned with METIS (DESIGN §3): one vertex per tile,
+// weighted by its work (free particles and active elements); one edge
+// between tiles that exchange ghosts (the 8 neighbours), weighted by the
+// ghost volume between them; one part per rank.
+#include <mpi.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "decomp/tiles.hpp"
+#include "solver/cloth.hpp"
+
+namespace drape {
+
+struct Partition {
+  std::vector<int> owner;     // rank per tile
+  std::vector<int64_t> work;  // per rank
+  int64_t edge_cut = 0;       // ghost volume between tiles of different ranks
+  double imbalance = 1.0;     // max / mean work per rank
+
+  std::vector<int> tiles_of(int rank) const;  // ascending
+};
+
+// Work per tile: free particles plus active edges, triples and shear corners.
+std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling);
+
+// METIS_PartGraphKway into `parts` parts (all tiles to rank 0 for one part).
+// Throws std::runtime_error when METIS fails.
+Partition partition_graph(const Tiling& tiling, const std::vector<int64_t>& work, int parts);
+
+// Collective: rank 0 partitions, every rank gets the same result. More ranks
+// than tiles is an InputError; a METIS failure a runtime_error, on every rank.
+Partition partition_tiles(const Tiling& tiling, const std::vector<int64_t>& work, MPI_Comm comm);
+
+}  // namespace drape
