@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "amrc/criterion.hpp"
 #include "world.hpp"
 
 namespace drape::test {
@@ -16,12 +17,25 @@ struct Term {
   const char* name;
   bool newton, stretch, bend, shear;
   double memory;  // weight of the force memory term
+  bool amrc = false;  // on an AMRC mesh with hanging particles
 };
+
+// A mesh with coarse leaves, fine leaves and hanging particles between them
+// (some on sides clipped at the far border).
+Quadtree amrc_tree() {
+  Quadtree t(13, 11, 2);
+  const std::vector<double> flat(13 * 11, 0.0);
+  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
+  t.refine(t.leaf_at(5, 4));
+  t.refine(t.leaf_at(9, 9));
+  t.refine(t.leaf_at(4, 4));
+  return t;
+}
 
 // Random, well away from flat: positions jittered by 30% of h, forces drawn
 // over several band widths, a sphere and the floor touching some particles.
-World random_world(unsigned seed) {
-  Scene s = flat_scene(7, 6, 0.06, 0.05);
+World random_world(unsigned seed, bool amrc = false) {
+  Scene s = amrc ? flat_scene(13, 11, 0.12, 0.10) : flat_scene(7, 6, 0.06, 0.05);
   s.cloth.height = 0.004;
   s.obstacle.shape = ObstacleShape::Sphere;
   s.obstacle.center = {0.0, 0.0, -0.02};
@@ -29,6 +43,7 @@ World random_world(unsigned seed) {
   s.obstacle.floor = true;
   s.solver.dt = 2e-3;
   World w(s, test_fabric());
+  if (amrc) w.tree = amrc_tree();
   w.cloth.flags[0] |= kFixed;  // a clamped corner: not an unknown
   w.rebuild();
   std::mt19937_64 rng(seed);
@@ -102,7 +117,8 @@ class GradientTerm : public ::testing::TestWithParam<Term> {};
 TEST_P(GradientTerm, AnalyticMatchesCentralDifferences) {
   const Term t = GetParam();
   for (unsigned seed : {1u, 2u, 3u}) {
-    World w = random_world(seed);
+    World w = random_world(seed, t.amrc);
+    if (t.amrc) ASSERT_GE(w.lists.hanging.size(), 4u) << "the AMRC mesh should have hanging particles";
     w.model.use_newton = t.newton;
     w.model.use_stretch = t.stretch;
     w.model.use_bend = t.bend;
@@ -123,7 +139,10 @@ INSTANTIATE_TEST_SUITE_P(EachTerm, GradientTerm,
                                            Term{"bend", false, false, true, false, 0.0},
                                            Term{"shear", false, false, false, true, 0.0},
                                            Term{"memory", false, false, false, false, 1.0},
-                                           Term{"all", true, true, true, true, 1.0}),
+                                           Term{"all", true, true, true, true, 1.0},
+                                           Term{"amrc_newton", true, false, false, false, 0.0, true},
+                                           Term{"amrc_bend", false, false, true, false, 0.0, true},
+                                           Term{"amrc_all", true, true, true, true, 1.0, true}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Gradient, NumericModeMatchesAnalytic) {

@@ -1,5 +1,7 @@
 #include "amrc/active_lists.hpp"
 
+#include "amrc/quadtree.hpp"
+
 #include <cmath>
 
 namespace drape {
@@ -52,7 +54,7 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
   build_ring(ring, 1, shear, out.ring_shears);
 }
 
-void rebuild_topology(Cloth& c, bool shear_enabled) {
+void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
   const Grid& g = c.grid;
   for (int d = 0; d < 2; ++d) {
     c.next[d].assign(g.n(), -1);
@@ -64,7 +66,7 @@ void rebuild_topology(Cloth& c, bool shear_enabled) {
     for (int j = 0; j < g.nj; ++j) {
       const int64_t p = g.id(i, j);
       if (!c.active(p)) continue;
-      if (last >= 0) {
+      if (last >= 0 && (!tree || tree->on_side(last, p))) {
         c.next[1][last] = p;
         c.prev[1][p] = last;
       }
@@ -76,7 +78,7 @@ void rebuild_topology(Cloth& c, bool shear_enabled) {
     for (int i = 0; i < g.ni; ++i) {
       const int64_t p = g.id(i, j);
       if (!c.active(p)) continue;
-      if (last >= 0) {
+      if (last >= 0 && (!tree || tree->on_side(last, p))) {
         c.next[0][last] = p;
         c.prev[0][p] = last;
       }

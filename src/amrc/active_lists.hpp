@@ -12,10 +12,18 @@
 
 namespace drape {
 
+class Quadtree;
+
 struct ActiveList {
   std::vector<int64_t> items;       // slot or particle indices
   std::vector<int64_t> tile_begin;  // size tiles+1: items of tile k are [tile_begin[k], tile_begin[k+1])
   int64_t size() const { return int64_t(items.size()); }
+};
+
+// A hanging particle h on the coarse side a-b: x_h = (1 - t) x_a + t x_b.
+struct HangingLink {
+  int64_t h, a, b;
+  double t;
 };
 
 struct ActiveLists {
@@ -28,6 +36,10 @@ struct ActiveLists {
   // rank's): computed here too, because this rank's particles gather their
   // contributions; their cost belongs to their owner. One run, no tiles.
   ActiveList ring_edges, ring_triples, ring_shears;
+  // AMRC's hanging particles, finest sides first (an end may itself hang on
+  // a coarser side): positions follow their ends; forces and gradients on
+  // them pass to their ends. Empty without AMRC.
+  std::vector<HangingLink> hanging;
 };
 
 // Builds the lists over `owned_tiles` (ascending tile ids) from the cloth's
@@ -40,7 +52,8 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
 // flags: an edge joins consecutive active particles on a grid line, a triple
 // sits at an active particle with active neighbours on both sides, a shear
 // corner at an active particle with both a warp and a weft neighbour.
-void rebuild_topology(Cloth& c, bool shear_enabled);
+// With a quadtree, only along leaf sides (never across a coarse leaf).
+void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree = nullptr);
 
 }  // namespace drape
 

@@ -37,6 +37,8 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   gf_t_.assign(2 * n, 0.0);
   gf_s_.assign(n, 0.0);
   rho_.assign(3 * n, 0.0);
+  hres_.assign(3 * n, 0.0);
+  hpend_.assign(3 * n, 0.0);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
 }
 
@@ -120,6 +122,8 @@ void Evaluator::particle_residual(int64_t p, const double* z) {
     r[1] += v[1];
     r[2] += v[2];
   });
+  if (!lists_.hanging.empty())  // forces passed on by hanging particles (zero elsewhere)
+    for (int k = 0; k < 3; ++k) r[k] += hres_[3 * p + k];
   const double inv = 1.0 / m_.force_scale;
   for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
   cost_p_[p] = 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
@@ -128,8 +132,11 @@ void Evaluator::particle_residual(int64_t p, const double* z) {
 // ---- pass 3: element gradient contributions ------------------------------
 
 namespace {
+// Zero for particles without an equation (fixed); a hanging particle's is
+// its ends' interpolated (hanging_residuals).
+inline bool has_residual(const Cloth& c, int64_t p) { return c.free(p) || (c.flags[p] & kHanging); }
 inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) {
-  return c.free(p) ? load3<double>(&rho[3 * p]) : V{0, 0, 0};
+  return has_residual(c, p) ? load3<double>(&rho[3 * p]) : V{0, 0, 0};
 }
 }  // namespace
 
@@ -233,26 +240,87 @@ CostTerms Evaluator::reduce_costs() {
 
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   halo_.exchange(z, Halo::kAll);
+  interpolate_hanging(z);
   for_edges([&](int64_t s) { edge_forces(s, z); });
   for_triples([&](int64_t s) { triple_forces(s, z); });
   for_shears([&](int64_t s) { shear_forces(s, z); });
+  hanging_forces(z);
   for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_residual(p, z); });
+  clear_hanging(hres_);
   const CostTerms cost = reduce_costs();
   if (!grad) return cost;
   halo_.exchange_particles(rho_.data(), 3);
+  hanging_residuals();
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });
   for_edges([&](int64_t s) { edge_gradient(s, z, grad); });
   for_triples([&](int64_t s) { triple_gradient(s, z, grad); });
   for_shears([&](int64_t s) { shear_gradient(s, z, grad); });
   for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_gradient(p, z, grad); });
+  // A hanging particle's gradient: its contact term and its elements'.
+  hanging_into_ends(grad, [&](int64_t h, double* v) {
+    double fc[3], jtr[3] = {0, 0, 0};
+    contact_force(m_.contact, z + 3 * h, fc, &rho_[3 * h], jtr);
+    for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
+    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) {
+      v[0] += c[0];
+      v[1] += c[1];
+      v[2] += c[2];
+    });
+  }, 1.0);
   return cost;
 }
+
+// ---- AMRC hanging particles -------------------------------------------------
+
+void Evaluator::interpolate_hanging(double* x) const {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  for (auto g = hl.rbegin(); g != hl.rend(); ++g)  // coarsest sides first: their ends are final
+    for (int k = 0; k < 3; ++k) x[3 * g->h + k] = (1 - g->t) * x[3 * g->a + k] + g->t * x[3 * g->b + k];
+}
+
+void Evaluator::clear_hanging(std::vector<double>& a) {
+  for (const HangingLink& g : lists_.hanging)
+    for (int64_t p : {g.h, g.a, g.b})
+      for (int k = 0; k < 3; ++k) a[3 * p + k] = 0.0;
+}
+
+// The force on a hanging particle (its elements' and the contact's; it has
+// no mass of its own) acts on its ends, by the interpolation weights.
+void Evaluator::hanging_forces(const double* z) {
+  clear_hanging(hres_);
+  for (const HangingLink& g : lists_.hanging) {  // finest first: forces move on up
+    double f[3], fc[3];
+    contact_force(m_.contact, z + 3 * g.h, fc);
+    for (int k = 0; k < 3; ++k) f[k] = hres_[3 * g.h + k] - fc[k];
+    gather(g.h, buf_e_, buf_t_, buf_s_, [&](const double* v) {
+      f[0] += v[0];
+      f[1] += v[1];
+      f[2] += v[2];
+    });
+    for (int k = 0; k < 3; ++k) {
+      hres_[3 * g.a + k] += (1 - g.t) * f[k];
+      hres_[3 * g.b + k] += g.t * f[k];
+    }
+  }
+}
+
+// What the elements see at a hanging particle: its ends' residuals,
+// interpolated (the chain rule of the force it passes on).
+void Evaluator::hanging_residuals() {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  for (auto g = hl.rbegin(); g != hl.rend(); ++g) {
+    const V ra = residual_of(c_, rho_, g->a), rb = residual_of(c_, rho_, g->b);
+    store3((1 - g->t) * ra + g->t * rb, &rho_[3 * g->h]);
+  }
+}
+
 
 // ---- diagonal scaling -----------------------------------------------------
 
 void Evaluator::scaling_diagonal(double* z, double* diag) {
   halo_.exchange(z, Halo::kAll);
+  interpolate_hanging(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { diag[k] = 1.0; });
@@ -328,6 +396,13 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) { dsum += v[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   });
+  hanging_into_ends(diag, [&](int64_t h, double* v) {
+    double fc[3], slope = 0;
+    contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
+    double dsum = slope * slope * inv2;
+    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
+    v[0] = v[1] = v[2] = dsum;
+  }, 2.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.
   parallel_for(nz, [&](int64_t k) {
     if (!(diag[k] > 0)) diag[k] = 1.0;

@@ -11,6 +11,7 @@
 // contributions into per-slot buffers and each particle gathers its own in a
 // fixed order, so no two threads write one value (no atomics) and results are
 // the same for any thread count or schedule.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -69,6 +70,9 @@ class Evaluator {
   const std::vector<double>& residual() const { return rho_; }
 
   const ActiveLists& lists() const { return lists_; }
+  // Puts AMRC's hanging particles (3 values per particle in x) on their
+  // coarse sides; the entry points above do it to z themselves.
+  void interpolate_hanging(double* x) const;
   double force_scale() const { return m_.force_scale; }
 
  private:
@@ -97,6 +101,15 @@ class Evaluator {
   void gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
               const std::vector<double>& s, Add&& add) const;
   CostTerms reduce_costs();
+  // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
+  // order: the element forces on them into their ends' residuals; residuals
+  // back onto them; per-particle results (the gradient, K v, diagonals) onto
+  // their ends.
+  void hanging_forces(const double* z);
+  void hanging_residuals();
+  template <class Own>
+  void hanging_into_ends(double* out, Own&& own, double power);
+  void clear_hanging(std::vector<double>& a);
   double window_cost(const double* z, int ic, int jc);
 
   const Cloth& c_;
@@ -111,6 +124,7 @@ class Evaluator {
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
+  std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
 };
@@ -132,6 +146,33 @@ void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vecto
   const int64_t q0 = c_.prev[0][p], q1 = c_.prev[1][p];
   if (q0 >= 0 && c_.shear_on[q0]) add(&s[9 * q0 + 3]);
   if (q1 >= 0 && c_.shear_on[q1]) add(&s[9 * q1 + 6]);
+}
+
+// Per-particle results at hanging particles (own(h, v) computes h's) go to
+// their ends with the weights to `power` (1: gradients and K v; 2: diagonals);
+// the hanging entries themselves end as zero: they are not unknowns.
+template <class Own>
+inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power) {
+  if (lists_.hanging.empty()) return;
+  clear_hanging(hpend_);
+  for (const HangingLink& g : lists_.hanging) {
+    double v[3];
+    own(g.h, v);
+    const double wa = std::pow(1 - g.t, power), wb = std::pow(g.t, power);
+    for (int k = 0; k < 3; ++k) {
+      v[k] += hpend_[3 * g.h + k];
+      hpend_[3 * g.a + k] += wa * v[k];
+      hpend_[3 * g.b + k] += wb * v[k];
+    }
+  }
+  for (const HangingLink& g : lists_.hanging)
+    for (int64_t e : {g.a, g.b})
+      for (int k = 0; k < 3; ++k) {
+        if (c_.free(e)) out[3 * e + k] += hpend_[3 * e + k];
+        hpend_[3 * e + k] = 0.0;  // applied once
+      }
+  for (const HangingLink& g : lists_.hanging)
+    for (int k = 0; k < 3; ++k) out[3 * g.h + k] = power == 1.0 ? 0.0 : 1.0;
 }
 
 }  // namespace drape

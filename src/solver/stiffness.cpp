@@ -24,6 +24,7 @@ inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 
 void Evaluator::hysteresis_forces(double* z) {
   halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
+  interpolate_hanging(z);
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();  // f1 is indexed from the tension block
   for_edges([&](int64_t s) {
@@ -50,6 +51,7 @@ void Evaluator::hysteresis_forces(double* z) {
 
 void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   halo_.exchange(v, Halo::kPositions);
+  interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   for_edges([&](int64_t s) {
@@ -104,6 +106,19 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     });
     for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
   });
+  hanging_into_ends(kv, [&](int64_t h, double* out) {  // P^T K P: no mass at h
+    double fc[3], slope = 0;
+    const bool touching = contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
+    const double fn = std::sqrt(fc[0] * fc[0] + fc[1] * fc[1] + fc[2] * fc[2]);
+    const double* vh = v + 3 * h;
+    const double nv = touching && fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
+    for (int k = 0; k < 3; ++k) out[k] = touching && fn > 0 ? slope * nv * fc[k] / fn : 0.0;
+    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) {
+      out[0] += c[0];
+      out[1] += c[1];
+      out[2] += c[2];
+    });
+  }, 1.0);
 }
 
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
@@ -147,6 +162,13 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   });
+  hanging_into_ends(diag, [&](int64_t h, double* out) {
+    double fc[3], slope = 0;
+    contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
+    double dsum = slope / 3;
+    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
+    out[0] = out[1] = out[2] = dsum;
+  }, 2.0);
 }
 
 }  // namespace drape

@@ -145,6 +145,8 @@ void TimeLoop::accept(StepStats& st) {
     }
     vmax = std::max(vmax, std::sqrt(v2) / c_.dt);
   }
+  ev_.interpolate_hanging(c_.x1.data());  // hanging particles follow their ends
+  ev_.interpolate_hanging(c_.x2.data());
   st.max_speed = red_.max(vmax);
   st.projections = red_.sum_i64(pushed);
 }

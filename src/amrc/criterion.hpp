@@ -1,0 +1,21 @@
+#pragma once
+// The AMRC criterion (paper §3): refine where the bending is large, coarsen
+// where it is small, with a gap between the two thresholds so that a cell
+// does not flip back and forth.
+#include <vector>
+
+#include "amrc/quadtree.hpp"
+
+namespace drape {
+
+struct AdaptStats {
+  int refined = 0, coarsened = 0;
+};
+
+// One pass: every leaf whose largest indicator (over the particles of its
+// closed cell) exceeds `refine` splits; then every cell whose children are
+// all leaves with indicators below `coarsen` merges (2:1 balance permitting).
+// `indicator` has one value per particle (the run uses the bending cost).
+AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen);
+
+}  // namespace drape

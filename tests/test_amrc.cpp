@@ -1,0 +1,249 @@
+// The AMRC hierarchy: 2:1 balance and mass after random refine/coarsen
+// sequences, hanging particles on their coarse sides, refine-then-coarsen as
+// the identity, and the criterion taking a flat cloth to the coarsest mesh
+// and a sharp fold to the finest. Grids are clipped (not k * 2^L + 1).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+
+#include "amrc/criterion.hpp"
+#include "amrc/quadtree.hpp"
+#include "solver/cloth.hpp"
+#include "world.hpp"
+
+namespace drape::test {
+namespace {
+
+constexpr int kNi = 23, kNj = 19, kMaxLevel = 3;
+constexpr double kHi = 0.01, kHj = 0.012, kDensity = 0.43;
+
+double total_mass(const Quadtree& t) {
+  std::vector<double> m;
+  t.masses(kDensity, kHi, kHj, m);
+  double s = 0;
+  for (double v : m) s += v;
+  return s;
+}
+
+double exact_mass() { return kDensity * (kNi - 1) * kHi * (kNj - 1) * kHj; }
+
+// A random leaf refined, or the parent of one coarsened.
+void random_change(Quadtree& t, std::mt19937& rng) {
+  const Cell c = t.leaf_at(int(rng() % (kNi - 1)), int(rng() % (kNj - 1)));
+  if (rng() % 2) {
+    t.refine(c);
+  } else {
+    const int l = c.level + 1;
+    t.coarsen({(c.i >> l) << l, (c.j >> l) << l, l});
+  }
+}
+
+Quadtree coarsest() {
+  Quadtree t(kNi, kNj, kMaxLevel);
+  const std::vector<double> flat(size_t(kNi) * kNj, 0.0);
+  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, 1.0, 0.5);
+  return t;
+}
+
+TEST(Quadtree, StartsAtTheFinestMesh) {
+  Quadtree t(kNi, kNj, kMaxLevel);
+  std::vector<uint8_t> flags, level;
+  t.mark(flags, level);
+  for (size_t p = 0; p < flags.size(); ++p) {
+    EXPECT_EQ(flags[p], kActive) << p;
+    EXPECT_EQ(level[p], 0) << p;
+  }
+  EXPECT_TRUE(t.balanced());
+  EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
+}
+
+TEST(Quadtree, RandomSequencesKeepBalanceMassAndHangingParticles) {
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    std::mt19937 rng(seed);
+    Quadtree t = seed % 2 ? Quadtree(kNi, kNj, kMaxLevel) : coarsest();
+    int hanging_seen = 0;
+    for (int step = 0; step < 150; ++step) {
+      random_change(t, rng);
+      ASSERT_TRUE(t.balanced()) << "seed " << seed << " step " << step;
+      ASSERT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass()) << "seed " << seed << " step " << step;
+      std::vector<uint8_t> flags, level;
+      t.mark(flags, level);
+      std::vector<double> mass;
+      t.masses(kDensity, kHi, kHj, mass);
+      for (int64_t p = 0; p < int64_t(flags.size()); ++p) {
+        int64_t a = -1, b = -1;
+        const bool hangs = t.hanging_parents(p, a, b);
+        ASSERT_EQ(hangs, bool(flags[p] & kHanging)) << p;
+        if (!(flags[p] & kActive) || hangs) ASSERT_EQ(mass[p], 0.0) << "particle " << p << " carries mass";
+        if (!hangs) continue;
+        ++hanging_seen;
+        // Between two active particles on a grid line; in the middle unless
+        // the side is clipped at the far border.
+        ASSERT_TRUE(flags[a] & kActive);
+        ASSERT_TRUE(flags[b] & kActive);
+        ASSERT_TRUE(a < p && p < b) << "hanging particle " << p << " outside " << a << "-" << b;
+        ASSERT_TRUE(a / kNj == b / kNj || a % kNj == b % kNj) << "side " << a << "-" << b << " not on a grid line";
+        const bool clipped = b / kNj == kNi - 1 || b % kNj == kNj - 1;
+        if (!clipped) ASSERT_EQ(2 * p, a + b) << "hanging particle " << p << " not in the middle of " << a << "-" << b;
+      }
+    }
+    EXPECT_GT(hanging_seen, 0) << "seed " << seed << " never made a hanging particle";
+  }
+}
+
+TEST(Quadtree, HangingParticlesLieOnTheirCoarseSide) {
+  std::mt19937 rng(11);
+  Quadtree t = coarsest();
+  for (int step = 0; step < 60; ++step) random_change(t, rng);
+  std::vector<double> x(3 * kNi * kNj);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (double& v : x) v = u(rng);
+  t.interpolate_hanging(x.data());
+  std::vector<uint8_t> flags, level;
+  t.mark(flags, level);
+  int checked = 0;
+  for (int64_t p = 0; p < kNi * kNj; ++p) {
+    int64_t a, b;
+    if (!t.hanging_parents(p, a, b)) continue;
+    // On the straight line between the ends, at its share of the side.
+    const double t = double(p - a) / double(b - a);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(x[3 * p + k], (1 - t) * x[3 * a + k] + t * x[3 * b + k], 1e-15) << p;
+    ++checked;
+  }
+  EXPECT_GT(checked, 0);
+}
+
+TEST(Quadtree, RefineThenCoarsenIsTheIdentity) {
+  std::mt19937 rng(5);
+  Quadtree t = coarsest();
+  for (int step = 0; step < 40; ++step) random_change(t, rng);
+  std::vector<Cell> leaves;
+  t.leaves(leaves);
+  int tried = 0;
+  for (const Cell& c : leaves) {
+    if (!t.can_refine(c)) continue;
+    const Quadtree before = t;
+    std::vector<uint8_t> f0, l0, f1, l1;
+    std::vector<double> m0, m1;
+    before.mark(f0, l0);
+    before.masses(kDensity, kHi, kHj, m0);
+    t.refine(c);
+    t.coarsen(c);
+    // A refinement that had to refine neighbours first is undone by
+    // coarsening them too.
+    for (int pass = 0; pass < kMaxLevel; ++pass) {
+      std::vector<Cell> now;
+      before.leaves(now);
+      for (const Cell& o : now) t.coarsen(o);
+    }
+    t.mark(f1, l1);
+    t.masses(kDensity, kHi, kHj, m1);
+    ASSERT_EQ(f0, f1) << "leaf " << c.i << "," << c.j << " level " << c.level;
+    ASSERT_EQ(l0, l1);
+    ASSERT_EQ(m0, m1);
+    ++tried;
+  }
+  EXPECT_GT(tried, 3);
+}
+
+TEST(Criterion, FlatClothCoarsensToTheCoarsestLevel) {
+  const Quadtree t = coarsest();
+  std::vector<Cell> leaves;
+  t.leaves(leaves);
+  for (const Cell& c : leaves) EXPECT_EQ(c.level, kMaxLevel) << c.i << "," << c.j;
+  EXPECT_TRUE(t.balanced());
+  EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
+}
+
+TEST(Criterion, SharpFoldRefinesToTheFinestLevel) {
+  Quadtree t = coarsest();
+  // A fold along the grid line i = 9: the cloth turns by 90 degrees there.
+  const int fold = 9;
+  auto pos = [&](int i, int j) {
+    const double s = (i - fold) * kHi;
+    return std::array<double, 3>{std::min(s, 0.0), j * kHj, std::max(s, 0.0)};
+  };
+  std::vector<double> indicator(size_t(kNi) * kNj, 0.0);
+  for (int i = 1; i + 1 < kNi; ++i)
+    for (int j = 0; j < kNj; ++j) {
+      const auto a = pos(i - 1, j), b = pos(i, j), c = pos(i + 1, j);
+      double u[3], v[3], uv = 0, uu = 0, vv = 0;
+      for (int k = 0; k < 3; ++k) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - b[k];
+        uv += u[k] * v[k];
+        uu += u[k] * u[k];
+        vv += v[k] * v[k];
+      }
+      indicator[size_t(i) * kNj + j] = std::acos(std::clamp(uv / std::sqrt(uu * vv), -1.0, 1.0));
+    }
+  for (int pass = 0; pass < 10; ++pass) adapt(t, indicator, 0.5, 0.1);
+  ASSERT_TRUE(t.balanced());
+  std::vector<Cell> leaves;
+  t.leaves(leaves);
+  int finest = 0, coarse = 0;
+  for (const Cell& c : leaves) {
+    const bool touches = c.i <= fold && fold <= t.i_end(c);
+    if (touches) EXPECT_EQ(c.level, 0) << "leaf at " << c.i << "," << c.j << " on the fold";
+    finest += touches && c.level == 0;
+    coarse += !touches && c.level == kMaxLevel;
+  }
+  EXPECT_GT(finest, 0);
+  EXPECT_GT(coarse, 0) << "far from the fold the mesh should stay coarse";
+  EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
+}
+
+}  // namespace
+}  // namespace drape::test
+
+// ------------------------------------------------------- the solver's view --
+
+namespace drape::test {
+namespace {
+
+// Internal forces are action and reaction: summed over every particle that
+// has an equation they cancel, hanging particles included, because those
+// pass their forces on to the ends of their sides. So the residuals' sum is
+// the inertia-and-gravity sum alone.
+TEST(AmrcMesh, InternalForcesCancelWithHangingParticles) {
+  Scene s = flat_scene(13, 11, 0.12, 0.10);
+  World w(s, test_fabric());
+  Quadtree t(13, 11, 2);
+  const std::vector<double> flat(13 * 11, 0.0);
+  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
+  t.refine(t.leaf_at(5, 4));
+  t.refine(t.leaf_at(4, 4));
+  w.tree = t;
+  w.rebuild();
+  ASSERT_GE(w.lists.hanging.size(), 4u);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Cloth& c = w.cloth;
+  for (int64_t k = 0; k < 3 * c.grid.n(); ++k) c.z[k] += 0.2 * c.grid.hi * u(rng);
+  const Layout& L = c.layout;
+  for (int64_t k = L.tension(); k < L.size(); ++k) c.z[k] = 10.0 * u(rng);
+  w.model.dt = w.model.dt_prev = 1e-3;
+  w.loop->freeze_bend_axes();
+  std::vector<double> grad(c.z.size());
+  w.loop->evaluator().evaluate(c.z.data(), grad.data());
+  const std::vector<double>& rho = w.loop->evaluator().residual();
+  double sum[3] = {0, 0, 0}, inertia[3] = {0, 0, 0}, scale = 0;
+  for (int64_t p : w.lists.particles.items)
+    for (int k = 0; k < 3; ++k) {
+      sum[k] += rho[3 * p + k] * w.model.force_scale;
+      const double a = w.model.accel_coeff() * (c.z[3 * p + k] - c.x1[3 * p + k] - (c.x1[3 * p + k] - c.x2[3 * p + k]));
+      inertia[k] += c.mass[p] * (a - w.model.gravity[k]);
+      scale = std::max(scale, std::fabs(rho[3 * p + k] * w.model.force_scale));
+    }
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(sum[k], inertia[k], 1e-9 * scale) << "component " << k;
+  // Without passing them on, the hanging particles' forces would be lost.
+  double lost = 0;
+  for (const HangingLink& g : w.lists.hanging) lost += std::fabs(rho[3 * g.h]);
+  EXPECT_GT(lost, 0.0) << "hanging particles should see their ends' residuals";
+}
+
+}  // namespace
+}  // namespace drape::test
