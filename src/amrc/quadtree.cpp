@@ -16,6 +16,17 @@ Quadtree::Quadtree(int ni, int nj, int max_level) : ni_(ni), nj_(nj), max_level_
   level_.assign(size_t(ni - 1) * (nj - 1), 0);
 }
 
+void Quadtree::set_levels(const std::vector<uint8_t>& levels) {
+  if (levels.size() != level_.size()) throw std::invalid_argument("quadtree: levels of another grid");
+  for (uint8_t l : levels)
+    if (l > max_level_) throw std::invalid_argument("quadtree: a level above max_level");
+  level_ = levels;
+  for (int ci = 0; ci < ni_ - 1; ++ci)
+    for (int cj = 0; cj < nj_ - 1; ++cj)
+      if (!is_leaf(leaf_at(ci, cj))) throw std::invalid_argument("quadtree: levels that are not a tree");
+  if (!balanced()) throw std::invalid_argument("quadtree: levels that are not 2:1 balanced");
+}
+
 Cell Quadtree::leaf_at(int ci, int cj) const {
   const int l = level_[size_t(ci) * (nj_ - 1) + cj];
   return {(ci >> l) << l, (cj >> l) << l, l};

@@ -32,6 +32,10 @@ class Quadtree {
   int ni() const { return ni_; }
   int nj() const { return nj_; }
   int max_level() const { return max_level_; }
+  // The leaf level over every finest interval (checkpoints); set_levels
+  // takes such an array back (it must describe a balanced tree).
+  const std::vector<uint8_t>& levels() const { return level_; }
+  void set_levels(const std::vector<uint8_t>& levels);
 
   // The leaf over finest interval (ci, cj).
   Cell leaf_at(int ci, int cj) const;

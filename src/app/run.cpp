@@ -16,6 +16,8 @@
 #include <memory>
 
 #include "amrc/active_lists.hpp"
+#include "amrc/amrc.hpp"
+#include "amrc/remesh.hpp"
 #include "decomp/collective.hpp"
 #include "decomp/decomposition.hpp"
 #include "decomp/gather.hpp"
@@ -129,7 +131,15 @@ struct Summary {
   Table2 table2;
   StepStats last;
   DecompStats decomp;
+  int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
+  int64_t refined = 0, coarsened = 0;                         // AMRC operations
 };
+
+int64_t active_particles(const Cloth& c) {
+  int64_t n = 0;
+  for (uint8_t f : c.flags) n += f & kActive;
+  return n;
+}
 
 double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red) {
   double worst = 0;
@@ -148,6 +158,16 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.begin_object("fabric").value("name", fabric.name).value("source", fabric.source)
       .value("density_kg_m2", fabric.density).end_object();
   j.value("particles", (long long)cloth.grid.n());
+  j.begin_object("particles_active")
+      .value("min", (long long)s.active_min)
+      .value("max", (long long)s.active_max)
+      .value("final", (long long)s.active_final)
+      .end_object();
+  j.begin_object("amrc")
+      .value("enabled", scene.amrc.enabled)
+      .value("refined", (long long)s.refined)
+      .value("coarsened", (long long)s.coarsened)
+      .end_object();
   j.begin_array("grid").value(nullptr, cloth.grid.ni).value(nullptr, cloth.grid.nj).end_array();
   j.value("free_particles", (long long)free_particles);
   const RunCounters& n = s.counters;
@@ -263,6 +283,12 @@ void add_step(RunCounters& n, const StepStats& st) {
 int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm) {
   const auto t0 = std::chrono::steady_clock::now();
   const int rank = rank_of(comm), ranks = size_of(comm);
+  if (ranks > 1 && scene.amrc.enabled)
+    throw InputError("amrc.enabled = true runs on one rank for now (coarse elements reach beyond the "
+                     "ghost particles); run it without mpirun");
+  if (scene.amrc.enabled && scene.solver.gradient == GradientMode::Numeric)
+    throw InputError("amrc.enabled = true needs solver.gradient = \"analytic\" (the difference windows "
+                     "do not follow hanging particles)");
   if (ranks > 1 && scene.solver.gradient == GradientMode::Numeric)
     throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
                      "reach beyond the ghost particles); run it without mpirun");
@@ -276,6 +302,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   Tiling tiling;
   ActiveLists lists;
   Decomposition dec;
+  std::unique_ptr<Amrc> amrc;
   Summary sum;
   int last_frame = -1;  // the step of the last frame written (-1: none yet)
   {
@@ -288,6 +315,11 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       sum.counters = opt.restart->counters;
       sum.first_step = cloth.step;
     }
+    if (scene.amrc.enabled) {  // from the finest mesh (paper), or the checkpoint's
+      amrc = std::make_unique<Amrc>(cloth, scene.amrc.max_level);
+      if (opt.restart && !opt.restart->amrc_levels.empty()) amrc->restore(opt.restart->amrc_levels);
+      amrc->apply(cloth, fabric.density, scene.cloth.shear);
+    }
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
     dec = decompose(cloth, tiling, comm);  // refuses more ranks than tiles
@@ -296,7 +328,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   {
     ScopedPhase ph(tm, kLists);
     build_active_lists(cloth, tiling, dec.owned, lists, dec.halo ? dec.halo->ring() : std::vector<int64_t>{});
+    if (amrc) hanging_links(amrc->tree(), lists.hanging);
   }
+  sum.active_min = sum.active_max = sum.active_final = active_particles(cloth);
   const std::vector<int>& owned = dec.owned;
   const Reducer& red = *dec.reducer;
   LoopPolicy policy{scene.parallel.schedule, scene.parallel.chunk};
@@ -310,6 +344,10 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   }
 
   std::unique_ptr<Hdf5Output> h5;
+  auto write_frame = [&] {
+    if (amrc) amrc->fill_inactive(cloth);  // inactive particles on their leaf's surface
+    h5->write_frame(frame_of(cloth, blocks));
+  };
   {
     ScopedPhase ph(tm, kOutput);
     h5 = std::make_unique<Hdf5Output>(opt.output_dir, comm, scene, opt.scene_toml, fabric,
@@ -317,7 +355,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     // A restart drops the interrupted part's final frame unless it lies on
     // the frame cadence, so the continued file matches an uninterrupted run's.
     if (!opt.restart || (scene.output.every > 0 && cloth.step % scene.output.every == 0)) {
-      h5->write_frame(frame_of(cloth, blocks));
+      write_frame();
       last_frame = cloth.step;
     }
   }
@@ -351,13 +389,36 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   auto checkpoint = [&] {
     ScopedPhase ph(tm, kOutput);
     sum.counters.cg_first_step = loop.minimizer().first_step();
-    write_checkpoint(opt.output_dir, comm, cloth, blocks, opt.scene_toml, fabric, sum.counters);
+    write_checkpoint(opt.output_dir, comm, cloth, blocks, opt.scene_toml, fabric, sum.counters,
+                     amrc ? amrc->tree().levels() : std::vector<uint8_t>{});
     sum.checkpoint = opt.output_dir + "/checkpoint.h5";
     return cloth.step;
   };
   const int every = scene.output.every, ck_every = scene.output.checkpoint_every;
   const int poison = fault_step();
   int last_checkpoint = opt.restart ? cloth.step : -1;
+  // AMRC between steps (the paper checks every few CG iterations; between
+  // steps the minimiser never sees the mesh change under it).
+  auto adapt_mesh = [&] {
+    AdaptStats a;
+    {
+      ScopedPhase ph(tm, kAmrc);
+      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen);
+    }
+    sum.refined += a.refined;
+    sum.coarsened += a.coarsened;
+    if (a.refined == 0 && a.coarsened == 0) return;
+    {
+      ScopedPhase ph(tm, kLists);
+      build_active_lists(cloth, tiling, dec.owned, lists);
+      hanging_links(amrc->tree(), lists.hanging);
+      loop.mesh_changed();
+    }
+    const int64_t active = active_particles(cloth);
+    sum.active_min = std::min(sum.active_min, active);
+    sum.active_max = std::max(sum.active_max, active);
+    sum.active_final = active;
+  };
   const LoopClock clock0 = loop_clock();
   const auto stepping0 = std::chrono::steady_clock::now();
   while (cloth.step < scene.solver.steps) {
@@ -373,9 +434,10 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.at_rest = sum.counters.calm >= 3;
     if (!last && !sum.at_rest && every > 0 && st.step % every == 0) {
       ScopedPhase ph(tm, kOutput);
-      h5->write_frame(frame_of(cloth, blocks));
+      write_frame();
       last_frame = st.step;
     }
+    if (amrc && st.step % scene.amrc.every == 0) adapt_mesh();
     if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
     if (sum.at_rest || stop_now()) break;
   }
@@ -397,10 +459,11 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                       threads);
   sum.decomp = decomp_stats(dec, tiling, comm);
   const double depth = max_penetration(cloth, model, lists, red);
+  if (amrc) amrc->fill_inactive(cloth);  // the state's inactive particles, as written
   const Checksum ck = state_checksum(cloth, tiling, owned, red);
   {
     ScopedPhase ph(tm, kOutput);
-    if (cloth.step != last_frame) h5->write_frame(frame_of(cloth, blocks));  // the final state
+    if (cloth.step != last_frame) write_frame();  // the final state
     h5->finish();
     if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
     if (rank == 0 && scene.output.picture)

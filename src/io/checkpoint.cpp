@@ -103,7 +103,8 @@ RunCounters counters_from(const std::vector<double>& v) {
 }
 
 // Everything that is not per particle.
-uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const RunCounters& r) {
+uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const RunCounters& r,
+                   const std::vector<uint8_t>& levels) {
   Hasher h(0xa4093822299f31d0ULL);
   h.add(uint64_t(c.grid.ni));
   h.add(uint64_t(c.grid.nj));
@@ -115,6 +116,8 @@ uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const
   for (double v : fabric_numbers(fabric)) h.add(v);
   for (auto& [name, curve] : curves_of(fabric)) add_curve(h, *curve);
   for (double v : counter_numbers(r)) h.add(v);
+  h.add(uint64_t(levels.size()));
+  for (uint8_t l : levels) h.add(uint64_t(l));
   return h.value();
 }
 
@@ -181,13 +184,14 @@ void sync_file(const std::string& path) {
 
 void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
                       const std::vector<Block>& owned, const std::string& scene_toml,
-                      const Fabric& fabric, const RunCounters& counters) {
+                      const Fabric& fabric, const RunCounters& counters,
+                      const std::vector<uint8_t>& amrc_levels) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   const std::string path = dir + "/checkpoint.h5", tmp = path + ".tmp";
   uint64_t local = state_sum(cloth, owned), total = 0;
   MPI_Allreduce(&local, &total, 1, MPI_UINT64_T, MPI_SUM, comm);
-  const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters));
+  const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters, amrc_levels));
 
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   {
@@ -216,6 +220,15 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
     put_string(root, "digest", hex(digest));
     write_state(root, cloth, owned, dxpl.get());
     write_fabric(root, fabric, rank, dxpl.get());
+    if (!amrc_levels.empty()) {  // rank 0 writes the whole (replicated) tree
+      const hsize_t n = amrc_levels.size();
+      Selection sel{make_space({n}), make_space({n}), rank == 0 ? n : 0};
+      if (rank != 0) {
+        check_status(H5Sselect_none(sel.file.get()), "selecting nothing");
+        check_status(H5Sselect_none(sel.mem.get()), "selecting nothing");
+      }
+      write_dataset(root, "amrc_levels", H5T_STD_U8LE, H5T_NATIVE_UINT8, amrc_levels.data(), sel, dxpl.get());
+    }
     dxpl.reset();
     file.close("closing " + tmp);  // collective: every rank's blocks are in
   }
@@ -332,8 +345,12 @@ CheckpointState read_verified(const std::string& path) {
   ck.counters = counters_from(cn);
   read_state(root, c);
   ck.fabric = read_fabric(root);
+  if (H5Lexists(root, "amrc_levels", H5P_DEFAULT) > 0) {
+    ck.amrc_levels.resize(size_t(ni - 1) * (nj - 1));
+    read_dataset(root, "amrc_levels", H5T_NATIVE_UINT8, ck.amrc_levels.data(), ck.amrc_levels.size());
+  }
   const uint64_t digest = Hasher::mix(state_sum(c, {Block{0, c.grid.ni, 0, c.grid.nj}}) ^
-                                      meta_hash(c, ck.scene_toml, ck.fabric, ck.counters));
+                                      meta_hash(c, ck.scene_toml, ck.fabric, ck.counters, ck.amrc_levels));
   if (hex(digest) != get_string(root, "digest"))
     throw InputError("its contents do not match its digest (the file is damaged)");
   return ck;

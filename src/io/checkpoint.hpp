@@ -11,6 +11,8 @@
 //                (the step history), flags, level: (NI x NJ [x C]) arrays
 //   /fabric/     attributes name, source; dataset numbers (KES values, SI);
 //                one (n x 2) dataset per measured curve
+//   /amrc_levels the AMRC tree: leaf level per finest interval, (NI-1 x NJ-1),
+//                only when AMRC is on
 //
 // The digest hashes every particle's values with its global id together with
 // the scalars, scene and fabric; reading recomputes it, so a damaged or
@@ -45,6 +47,7 @@ struct CheckpointState {
   std::string scene_toml;
   Fabric fabric;
   RunCounters counters;
+  std::vector<uint8_t> amrc_levels;  // empty without AMRC
   // Grid, unknowns, history, flags, levels, step, time, dt, dt_prev; the
   // rest of the cloth is rebuilt from the scene and the flags.
   Cloth cloth;
@@ -53,7 +56,8 @@ struct CheckpointState {
 // Collective over `comm`. `owned`: the blocks this rank writes.
 void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
                       const std::vector<Block>& owned, const std::string& scene_toml,
-                      const Fabric& fabric, const RunCounters& counters);
+                      const Fabric& fabric, const RunCounters& counters,
+                      const std::vector<uint8_t>& amrc_levels = {});
 
 // Reads and verifies a checkpoint on this rank alone. Throws InputError
 // naming the file and what is wrong with it.

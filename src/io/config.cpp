@@ -74,9 +74,14 @@ const KeySpec kKeys[] = {
     {"parallel", "schedule", Kind::String},
     {"parallel", "chunk", Kind::Int},
     {"parallel", "threads", Kind::Int},
+    {"amrc", "enabled", Kind::Bool},
+    {"amrc", "max_level", Kind::Int},
+    {"amrc", "refine", Kind::Float},
+    {"amrc", "coarsen", Kind::Float},
+    {"amrc", "every", Kind::Int},
 };
 
-const char* const kSections[] = {"cloth", "obstacle", "solver", "output", "parallel"};
+const char* const kSections[] = {"cloth", "obstacle", "solver", "output", "parallel", "amrc"};
 
 std::string full_name(const KeySpec& k) {
   return *k.section ? std::string(k.section) + "." + k.key : std::string(k.key);
@@ -485,6 +490,11 @@ void read_scene(const Config& cfg, Scene& s) {
              {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided});
   r.get("parallel.chunk", s.parallel.chunk);
   r.get("parallel.threads", s.parallel.threads);
+  r.get("amrc.enabled", s.amrc.enabled);
+  r.get("amrc.max_level", s.amrc.max_level);
+  r.get("amrc.refine", s.amrc.refine);
+  r.get("amrc.coarsen", s.amrc.coarsen);
+  r.get("amrc.every", s.amrc.every);
 }
 
 // ------------------------------------------------------------ validation --
@@ -559,6 +569,13 @@ void validate(const Config& cfg, const Scene& s) {
   check(s.parallel.chunk >= 1, "parallel.chunk", "must be >= 1, got " + std::to_string(s.parallel.chunk));
   check(s.parallel.threads >= 0 && s.parallel.threads <= 1024, "parallel.threads",
         "must be in [0, 1024] (0: OpenMP default), got " + std::to_string(s.parallel.threads));
+  const auto& a = s.amrc;
+  check(a.max_level >= 0 && a.max_level <= 10, "amrc.max_level",
+        "must be in [0, 10], got " + std::to_string(a.max_level));
+  check(a.refine > 0, "amrc.refine", "must be > 0 (rad)" + got(a.refine));
+  check(a.coarsen >= 0 && a.coarsen < a.refine, check.given("amrc.coarsen", "amrc.refine"),
+        "amrc.coarsen must be in [0, amrc.refine) = [0, " + format_double(a.refine) + ")" + got(a.coarsen));
+  check(a.every >= 1, "amrc.every", "must be >= 1, got " + std::to_string(a.every));
 }
 
 // ----------------------------------------------------------------- output --
@@ -660,6 +677,13 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "schedule", quote(to_string(p.schedule)), "active-lists | static | dynamic | guided");
   line(os, "chunk", std::to_string(p.chunk), "tiles per chunk (dynamic schedule)");
   line(os, "threads", std::to_string(p.threads), "0: OMP_NUM_THREADS / OpenMP default");
+  const auto& a = s.amrc;
+  os << "\n[amrc]\n";
+  line(os, "enabled", b(a.enabled), "adaptive refinement and coarsening (one rank)");
+  line(os, "max_level", std::to_string(a.max_level), "coarsest leaves span 2^max_level intervals");
+  line(os, "refine", format_double(a.refine), "rad: split where a triple turns more");
+  line(os, "coarsen", format_double(a.coarsen), "rad: merge where all turn less (< refine)");
+  line(os, "every", std::to_string(a.every), "steps between adaptations");
   return os.str();
 }
 

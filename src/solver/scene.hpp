@@ -64,6 +64,17 @@ struct ParallelSpec {
   int threads = 0;              // 0: OMP_NUM_THREADS / OpenMP default
 };
 
+// AMRC (DESIGN §2): the criterion is the turning angle of the mesh at each
+// triple (rad), the bending a leaf's elements resolve: a leaf splits where it
+// exceeds `refine`, children merge where all stay below `coarsen`.
+struct AmrcSpec {
+  bool enabled = false;
+  int max_level = 3;            // coarsest leaves span 2^max_level intervals
+  double refine = 0.1;          // rad
+  double coarsen = 0.02;        // rad, below refine so cells do not flip back and forth
+  int every = 3;                // steps between adaptations
+};
+
 struct Scene {
   std::string name = "box-drape";
   ClothSpec cloth;
@@ -71,6 +82,7 @@ struct Scene {
   SolverSpec solver;
   OutputSpec output;
   ParallelSpec parallel;
+  AmrcSpec amrc;
 };
 
 const char* to_string(ObstacleShape s);

@@ -43,6 +43,9 @@ class TimeLoop {
   Minimizer& minimizer() { return cg_; }
   int64_t free_particles() const { return free_; }
 
+  // After AMRC changed the mesh (and the lists were rebuilt).
+  void mesh_changed() { free_ = red_.sum_i64(lists_.particles.size()); }
+
   // The bending axis of every triple from the step-start positions x1.
   void freeze_bend_axes();
 

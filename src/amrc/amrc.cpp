@@ -1,0 +1,123 @@
+#include "amrc/amrc.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "amrc/remesh.hpp"
+
+namespace drape {
+
+namespace {
+
+double turning_angle(const double* a, const double* b, const double* c) {
+  double u[3], v[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = b[k] - a[k];
+    v[k] = c[k] - b[k];
+  }
+  const double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2], cz = u[0] * v[1] - u[1] * v[0];
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+}
+
+// The leaf of `t` holding particle (i, j) and p's bilinear weights on its corners.
+struct Corners {
+  int64_t id[4];
+  double w[4];
+};
+
+Corners corners_of(const Quadtree& t, int i, int j) {
+  const Cell c = t.leaf_at(std::min(i, t.ni() - 2), std::min(j, t.nj() - 2));
+  const int ie = t.i_end(c), je = t.j_end(c);
+  const double u = double(i - c.i) / (ie - c.i), v = double(j - c.j) / (je - c.j);
+  const int64_t nj = t.nj();
+  return {{c.i * nj + c.j, ie * nj + c.j, c.i * nj + je, ie * nj + je},
+          {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v}};
+}
+
+}  // namespace
+
+Amrc::Amrc(const Cloth& c, int max_level)
+    : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
+  indicator_.assign(c.grid.n(), 0.0);
+  was_active_.assign(c.grid.n(), 0);
+  edge_on_ = c.edge_on;
+  triple_on_ = c.triple_on;
+  shear_on_ = c.shear_on;
+}
+
+void Amrc::indicator(const Cloth& c, std::vector<double>& out) const {
+  const int64_t n = c.grid.n();
+  out.assign(n, 0.0);
+  const double* x = c.x();
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p < n; ++p)
+    for (int d = 0; d < 2; ++d)
+      if (c.triple_on[2 * p + d])
+        out[p] = std::max(out[p], turning_angle(x + 3 * c.prev[d][p], x + 3 * p, x + 3 * c.next[d][p]));
+}
+
+void Amrc::apply(Cloth& c, double density, bool shear) const { apply_tree(tree_, c, density, shear); }
+
+void Amrc::fill_inactive(Cloth& c) const {
+  const int64_t n = c.grid.n();
+  double* x = c.x();
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p < n; ++p) {
+    if (c.active(p)) continue;
+    const Corners k = corners_of(tree_, c.grid.i_of(p), c.grid.j_of(p));
+    for (int a = 0; a < 3; ++a) {
+      double s = 0;
+      for (int q = 0; q < 4; ++q) s += k.w[q] * x[3 * k.id[q] + a];
+      x[3 * p + a] = s;
+    }
+  }
+}
+
+AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, double coarsen) {
+  indicator(c, indicator_);
+  old_ = tree_;
+  const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen);
+  if (st.refined == 0 && st.coarsened == 0) return st;
+  const int64_t n = c.grid.n();
+  for (int64_t p = 0; p < n; ++p) was_active_[p] = c.active(p);
+  // Newly active particles: positions and history on the old leaf's surface;
+  // the forces of the slots they start, from the old corners' slots that were
+  // on (forces are per unit width, so a split edge keeps its tension).
+  edge_on_ = c.edge_on;  // same sizes: copies without allocating
+  triple_on_ = c.triple_on;
+  shear_on_ = c.shear_on;
+  apply(c, density, shear);
+  const Layout& L = c.layout;
+  for (int64_t p = 0; p < n; ++p) {
+    if (was_active_[p] || !c.active(p)) continue;
+    const Corners k = corners_of(old_, c.grid.i_of(p), c.grid.j_of(p));
+    for (int a = 0; a < 3; ++a) {
+      double x = 0, x1 = 0, x2 = 0;
+      for (int q = 0; q < 4; ++q) {
+        x += k.w[q] * c.z[3 * k.id[q] + a];
+        x1 += k.w[q] * c.x1[3 * k.id[q] + a];
+        x2 += k.w[q] * c.x2[3 * k.id[q] + a];
+      }
+      c.z[3 * p + a] = x;
+      c.x1[3 * p + a] = x1;
+      c.x2[3 * p + a] = x2;
+    }
+    auto carry = [&](int64_t offset, int per, const std::vector<uint8_t>& on) {
+      for (int d = 0; d < per; ++d) {
+        double s = 0, w = 0;
+        for (int q = 0; q < 4; ++q)
+          if (on[per * k.id[q] + d]) {
+            s += k.w[q] * c.z[offset + per * k.id[q] + d];
+            w += k.w[q];
+          }
+        c.z[offset + per * p + d] = w > 0 ? s / w : 0.0;
+      }
+    };
+    carry(L.tension(), 2, edge_on_);
+    carry(L.moment(), 2, triple_on_);
+    carry(L.shear(), 1, shear_on_);
+  }
+  return st;
+}
+
+}  // namespace drape

@@ -1,0 +1,45 @@
+#pragma once
+// AMRC during a run (DESIGN §2, paper §3): every few steps, the mesh adapts
+// to the cloth's bending; particles and element slots that become active get
+// values interpolated from the leaf of the old mesh they lie in (positions,
+// history, forces), so the state carries across; then the marks, topology,
+// geometry and masses follow the new tree. Between adaptations inactive
+// particles are kept on their leaf's bilinear surface (for output).
+#include <cstdint>
+#include <vector>
+
+#include "amrc/criterion.hpp"
+#include "amrc/quadtree.hpp"
+#include "solver/cloth.hpp"
+
+namespace drape {
+
+class Amrc {
+ public:
+  Amrc(const Cloth& c, int max_level);
+
+  const Quadtree& tree() const { return tree_; }
+  // A checkpoint's tree (its finest intervals' leaf levels).
+  void restore(const std::vector<uint8_t>& levels) { tree_.set_levels(levels); }
+
+  // The criterion per particle: the largest turning angle (rad) of the mesh
+  // lines through it, at its active triples; 0 elsewhere.
+  void indicator(const Cloth& c, std::vector<double>& out) const;
+
+  // One adaptation of the tree to the cloth; when the mesh changes, carries
+  // the state over and rebuilds the cloth's mesh (the caller rebuilds lists).
+  AdaptStats adapt(Cloth& c, double density, bool shear, double refine, double coarsen);
+
+  // Applies the current tree to the cloth (marks, topology, geometry, masses).
+  void apply(Cloth& c, double density, bool shear) const;
+
+  // Puts inactive particles on the bilinear surface of their leaf.
+  void fill_inactive(Cloth& c) const;
+
+ private:
+  Quadtree tree_, old_;
+  std::vector<double> indicator_;
+  std::vector<uint8_t> was_active_, edge_on_, triple_on_, shear_on_;  // the old mesh's
+};
+
+}  // namespace drape
