@@ -428,7 +428,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     add_step(sum.counters, st);
     sum.last = st;
     progress.step(st);
-    const bool last = st.step == scene.solver.steps;
+    const bool reached = scene.solver.end_time > 0 && cloth.time >= scene.solver.end_time;
+    const bool last = st.step == scene.solver.steps || reached;
     sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed)
                             ? sum.counters.calm + 1 : 0;
     sum.at_rest = sum.counters.calm >= 3;
@@ -439,7 +440,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     if (amrc && st.step % scene.amrc.every == 0) adapt_mesh();
     if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
-    if (sum.at_rest || stop_now()) break;
+    if (sum.at_rest || reached || stop_now()) break;
   }
   sum.signal = stop_code / 2;
   sum.stopped_by_wall_limit = stop_code == 1;

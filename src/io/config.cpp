@@ -68,6 +68,7 @@ const KeySpec kKeys[] = {
     {"solver", "contact_thickness", Kind::Float},
     {"solver", "memory", Kind::Float},
     {"solver", "wall_limit", Kind::Float},
+    {"solver", "end_time", Kind::Float},
     {"output", "every", Kind::Int},
     {"output", "picture", Kind::Bool},
     {"output", "checkpoint_every", Kind::Int},
@@ -483,6 +484,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("solver.contact_thickness", s.solver.contact_thickness);
   r.get("solver.memory", s.solver.memory);
   r.get("solver.wall_limit", s.solver.wall_limit);
+  r.get("solver.end_time", s.solver.end_time);
   r.get("output.every", s.output.every);
   r.get("output.picture", s.output.picture);
   r.get("output.checkpoint_every", s.output.checkpoint_every);
@@ -559,6 +561,7 @@ void validate(const Config& cfg, const Scene& s) {
   check(v.rest_speed >= 0, "solver.rest_speed", "must be >= 0" + got(v.rest_speed));
   check(v.memory >= 0, "solver.memory", "must be >= 0" + got(v.memory));
   check(v.wall_limit >= 0, "solver.wall_limit", "must be >= 0 (0: no limit)" + got(v.wall_limit));
+  check(v.end_time >= 0, "solver.end_time", "must be >= 0 (0: no limit)" + got(v.end_time));
   check(v.contact_thickness >= 0, "solver.contact_thickness",
         "must be >= 0 (0: automatic)" + got(v.contact_thickness));
 
@@ -620,14 +623,15 @@ Scene load_scene_text(const std::string& toml, const std::string& origin,
 void check_restart_overrides(const std::vector<std::string>& overrides) {
   // What may change when a run continues: how long, how it is written and
   // how it is run; never the physics, or the restart would not continue it.
-  static const char* const allowed[] = {"solver.steps", "solver.wall_limit", "output.", "parallel."};
+  static const char* const allowed[] = {"solver.steps", "solver.end_time", "solver.wall_limit", "output.",
+                                        "parallel."};
   for (const std::string& o : overrides) {
     const std::string key = trim(o.substr(0, o.find('=')));
     bool ok = false;
     for (const char* a : allowed) ok = ok || key == a || (a[std::strlen(a) - 1] == '.' && key.rfind(a, 0) == 0);
     if (!ok)
       fail("--set " + o, key + " cannot change on --restart (the checkpoint fixes the physics); "
-                          "allowed: solver.steps, solver.wall_limit, output.*, parallel.*");
+                          "allowed: solver.steps, solver.end_time, solver.wall_limit, output.*, parallel.*");
   }
 }
 
@@ -667,6 +671,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");
   line(os, "memory", format_double(v.memory), "weight of the force memory (hysteresis) term");
   line(os, "wall_limit", format_double(v.wall_limit), "s; stop stepping after this long (0: no limit)");
+  line(os, "end_time", format_double(v.end_time), "s of simulated time; stop once reached (0: no limit)");
   os << "\n[output]\n";
   line(os, "every", std::to_string(s.output.every), "frame every N steps (0: final only)");
   line(os, "picture", b(s.output.picture), "drape.png of the final state");

@@ -50,6 +50,7 @@ struct SolverSpec {
   // history force while inside the band, the band edge once pushed past it.
   double memory = 1.0;
   double wall_limit = 540.0;    // s of stepping at most (0: none); the run then ends cleanly
+  double end_time = 0.0;        // s of simulated time at most (0: none)
 };
 
 struct OutputSpec {
