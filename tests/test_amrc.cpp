@@ -247,3 +247,67 @@ TEST(AmrcMesh, InternalForcesCancelWithHangingParticles) {
 
 }  // namespace
 }  // namespace drape::test
+
+namespace drape::test {
+namespace {
+
+// A flat cloth under uniform tension T (per unit width) in both directions,
+// at rest, without gravity: on any mesh the interior particles are in
+// balance. Returns the largest internal force (N) on a free particle at least
+// `margin` intervals from the border, with its residual unscaled.
+double largest_interior_force(World& w, int margin) {
+  Cloth& c = w.cloth;
+  const double T = 50.0, stretch = 1.01;
+  for (int64_t p = 0; p < c.grid.n(); ++p) {
+    const double x[3] = {stretch * c.grid.i_of(p) * c.grid.hi, stretch * c.grid.j_of(p) * c.grid.hj, 0.3};
+    for (int k = 0; k < 3; ++k) c.z[3 * p + k] = c.x1[3 * p + k] = c.x2[3 * p + k] = x[k];
+  }
+  const Layout& L = c.layout;
+  for (int64_t k = L.tension(); k < L.size(); ++k) c.z[k] = k < L.moment() ? T : 0.0;
+  for (double& g : w.model.gravity) g = 0;
+  w.model.dt = w.model.dt_prev = 1e-3;
+  w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
+  w.loop->freeze_bend_axes();
+  w.loop->evaluator().evaluate(c.z.data(), nullptr);
+  const std::vector<double>& rho = w.loop->evaluator().residual();
+  double worst = 0;
+  for (int64_t p : w.lists.particles.items) {
+    const int i = c.grid.i_of(p), j = c.grid.j_of(p);
+    if (i < margin || j < margin || i >= c.grid.ni - margin || j >= c.grid.nj - margin) continue;
+    for (int k = 0; k < 3; ++k) worst = std::max(worst, std::fabs(rho[3 * p + k]) * w.model.force_scale);
+  }
+  return worst;
+}
+
+// Across a split and a merge the force balance on the particles that
+// survive does not jump: on the uniformly tensioned cloth every interior
+// particle stays within a quarter of one coarse edge's force (T h_c) of
+// balance, hanging-particle interfaces included.
+TEST(AmrcMesh, ForceOnSurvivingParticlesStaysBalancedAcrossSplitAndMerge) {
+  Scene s = flat_scene(17, 17, 0.16, 0.16);
+  World w(s, test_fabric());
+  Quadtree t(17, 17, 2);
+  const std::vector<double> flat(17 * 17, 0.0);
+  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
+  w.tree = t;
+  w.rebuild();
+  const double coarse_edge = 50.0 * 4 * w.cloth.grid.hi;  // T h_c, N
+  const double before = largest_interior_force(w, 4);
+  EXPECT_LE(before, 1e-9 * coarse_edge) << "a uniform coarse mesh is in balance";
+  t.refine(t.leaf_at(8, 8));  // split (cascading to keep the balance)
+  w.tree = t;
+  w.rebuild();
+  ASSERT_FALSE(w.lists.hanging.empty());
+  const double split = largest_interior_force(w, 4);
+  EXPECT_LE(split, 0.25 * coarse_edge) << "after the split";
+  t.coarsen(Cell{8, 8, 2});  // merge back
+  w.tree = t;
+  w.rebuild();
+  const double merged = largest_interior_force(w, 4);
+  EXPECT_LE(merged, 0.25 * coarse_edge) << "after the merge";
+  std::printf("largest interior force / (T h_c): uniform %.3g, split %.3g, merged %.3g\n",
+              before / coarse_edge, split / coarse_edge, merged / coarse_edge);
+}
+
+}  // namespace
+}  // namespace drape::test
