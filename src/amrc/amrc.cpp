@@ -39,6 +39,7 @@ Corners corners_of(const Quadtree& t, int i, int j) {
 Amrc::Amrc(const Cloth& c, int max_level)
     : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
   indicator_.assign(c.grid.n(), 0.0);
+  cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
   was_active_.assign(c.grid.n(), 0);
   edge_on_ = c.edge_on;
   triple_on_ = c.triple_on;
@@ -76,7 +77,7 @@ void Amrc::fill_inactive(Cloth& c) const {
 AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, double coarsen) {
   indicator(c, indicator_);
   old_ = tree_;
-  const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen);
+  const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen, cells_);
   if (st.refined == 0 && st.coarsened == 0) return st;
   const int64_t n = c.grid.n();
   for (int64_t p = 0; p < n; ++p) was_active_[p] = c.active(p);

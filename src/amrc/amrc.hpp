@@ -39,6 +39,7 @@ class Amrc {
  private:
   Quadtree tree_, old_;
   std::vector<double> indicator_;
+  std::vector<Cell> cells_;  // adapt's scratch, reserved for every leaf
   std::vector<uint8_t> was_active_, edge_on_, triple_on_, shear_on_;  // the old mesh's
 };
 

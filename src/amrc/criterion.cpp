@@ -16,10 +16,10 @@ double largest(const Quadtree& t, const Cell& c, const std::vector<double>& indi
 
 }  // namespace
 
-AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen) {
+AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen,
+                 std::vector<Cell>& snapshot) {
   if (!(coarsen < refine)) throw std::invalid_argument("amrc: the coarsen threshold must be below refine");
   AdaptStats st;
-  std::vector<Cell> snapshot;
   tree.leaves(snapshot);
   for (const Cell& c : snapshot) {
     const Cell now = tree.leaf_at(c.i, c.j);

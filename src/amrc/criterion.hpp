@@ -16,6 +16,12 @@ struct AdaptStats {
 // closed cell) exceeds `refine` splits; then every cell whose children are
 // all leaves with indicators below `coarsen` merges (2:1 balance permitting).
 // `indicator` has one value per particle (the run uses the bending cost).
-AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen);
+// `scratch` holds the leaves (reserve (NI-1)(NJ-1) to adapt without allocating).
+AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen,
+                 std::vector<Cell>& scratch);
+inline AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen) {
+  std::vector<Cell> scratch;
+  return adapt(tree, indicator, refine, coarsen, scratch);
+}
 
 }  // namespace drape

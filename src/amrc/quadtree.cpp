@@ -14,6 +14,7 @@ Quadtree::Quadtree(int ni, int nj, int max_level) : ni_(ni), nj_(nj), max_level_
   if (ni < 2 || nj < 2 || max_level < 0 || max_level > 12)
     throw std::invalid_argument("quadtree: grid needs 2 x 2 particles and 0 <= max_level <= 12");
   level_.assign(size_t(ni - 1) * (nj - 1), 0);
+  hang_.reserve(size_t(ni) * nj);  // more than can hang
 }
 
 void Quadtree::set_levels(const std::vector<uint8_t>& levels) {
@@ -37,11 +38,7 @@ int Quadtree::j_end(const Cell& c) const { return std::min(c.j + (1 << c.level),
 
 void Quadtree::leaves(std::vector<Cell>& out) const {
   out.clear();
-  for (int ci = 0; ci < ni_ - 1; ++ci)
-    for (int cj = 0; cj < nj_ - 1; ++cj) {
-      const Cell c = leaf_at(ci, cj);
-      if (c.i == ci && c.j == cj) out.push_back(c);  // first interval of its leaf
-    }
+  for_each_leaf([&](const Cell& c) { out.push_back(c); });
 }
 
 bool Quadtree::is_leaf(const Cell& c) const {
@@ -108,14 +105,12 @@ void Quadtree::mark(std::vector<uint8_t>& flags, std::vector<uint8_t>& level) co
   flags.resize(n);
   level.assign(n, 255);
   for (int64_t p = 0; p < n; ++p) flags[p] &= uint8_t(~(kActive | kHanging));
-  std::vector<Cell> all;
-  leaves(all);
-  for (const Cell& c : all) {
+  for_each_leaf([&](const Cell& c) {
     const int ie = i_end(c), je = j_end(c);
     for (int i = c.i; i <= ie; ++i)
       for (int j = c.j; j <= je; ++j) level[id(i, j)] = std::min<uint8_t>(level[id(i, j)], uint8_t(c.level));
     for (int64_t q : {id(c.i, c.j), id(ie, c.j), id(c.i, je), id(ie, je)}) flags[q] |= kActive;
-  }
+  });
   int64_t a, b;
   for (int64_t p = 0; p < n; ++p)
     if ((flags[p] & kActive) && hanging_parents(p, a, b)) flags[p] |= kHanging;
@@ -124,35 +119,31 @@ void Quadtree::mark(std::vector<uint8_t>& flags, std::vector<uint8_t>& level) co
 void Quadtree::masses(double density, double hi, double hj, std::vector<double>& mass) const {
   const int64_t n = int64_t(ni_) * nj_;
   mass.assign(n, 0.0);
-  std::vector<Cell> all;
-  leaves(all);
-  for (const Cell& c : all) {
+  for_each_leaf([&](const Cell& c) {
     const int ie = i_end(c), je = j_end(c);
     const double quarter = 0.25 * density * (ie - c.i) * hi * (je - c.j) * hj;
     for (int64_t q : {id(c.i, c.j), id(ie, c.j), id(c.i, je), id(ie, je)}) mass[q] += quarter;
-  }
+  });
   // Hanging particles pass their mass to their side's ends, finest sides
   // first, so that mass reaching a hanging end moves on up.
-  std::vector<Hanging> hang;
-  hanging(hang);
-  for (const Hanging& g : hang) {
+  for (const Hanging& g : hanging()) {
     mass[g.a] += (1 - g.t) * mass[g.h];
     mass[g.b] += g.t * mass[g.h];
     mass[g.h] = 0;
   }
 }
 
-void Quadtree::hanging(std::vector<Hanging>& out) const {
-  out.clear();
+const std::vector<Quadtree::Hanging>& Quadtree::hanging() const {
+  hang_.clear();
   int64_t a, b;
   for (int64_t p = 0; p < int64_t(ni_) * nj_; ++p)
-    if (hanging_parents(p, a, b)) out.push_back({std::abs(b - a), p, a, b, double(p - a) / double(b - a)});
-  std::sort(out.begin(), out.end());
+    if (hanging_parents(p, a, b)) hang_.push_back({std::abs(b - a), p, a, b, double(p - a) / double(b - a)});
+  std::sort(hang_.begin(), hang_.end());
+  return hang_;
 }
 
 void Quadtree::interpolate_hanging(double* x) const {
-  std::vector<Hanging> hang;
-  hanging(hang);
+  const std::vector<Hanging>& hang = hanging();
   for (auto g = hang.rbegin(); g != hang.rend(); ++g)
     for (int k = 0; k < 3; ++k) x[3 * g->h + k] = (1 - g->t) * x[3 * g->a + k] + g->t * x[3 * g->b + k];
 }

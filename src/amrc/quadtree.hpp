@@ -28,6 +28,16 @@ class Quadtree {
   Quadtree() = default;
   // Every leaf at level 0 (the run starts at the finest mesh).
   Quadtree(int ni, int nj, int max_level);
+  // Copies the tree, not the scratch space (which the original reserved so
+  // that adapting during a run does not allocate).
+  Quadtree(const Quadtree& o) : ni_(o.ni_), nj_(o.nj_), max_level_(o.max_level_), level_(o.level_) {}
+  Quadtree& operator=(const Quadtree& o) {
+    ni_ = o.ni_;
+    nj_ = o.nj_;
+    max_level_ = o.max_level_;
+    level_ = o.level_;  // same sizes during a run: no allocation
+    return *this;
+  }
 
   int ni() const { return ni_; }
   int nj() const { return nj_; }
@@ -81,8 +91,8 @@ class Quadtree {
     double t;               // position along the side: x_h = (1 - t) x_a + t x_b
     bool operator<(const Hanging& o) const { return side != o.side ? side < o.side : h < o.h; }
   };
-  // Every hanging particle, finest sides first.
-  void hanging(std::vector<Hanging>& out) const;
+  // Every hanging particle, finest sides first (in the tree's scratch space).
+  const std::vector<Hanging>& hanging() const;
 
   // Puts every hanging particle (3 values per particle in x) on its coarse
   // side, linearly between its ends, coarsest sides first (ends may hang).
@@ -90,6 +100,14 @@ class Quadtree {
 
  private:
   bool is_leaf(const Cell& c) const;
+  template <class F>
+  void for_each_leaf(F&& f) const {
+    for (int ci = 0; ci < ni_ - 1; ++ci)
+      for (int cj = 0; cj < nj_ - 1; ++cj) {
+        const Cell c = leaf_at(ci, cj);
+        if (c.i == ci && c.j == cj) f(c);  // the leaf's first interval
+      }
+  }
   void set_level(const Cell& c, int level);
   // The finest intervals along the cell's four sides, just outside it.
   template <class F>
@@ -99,6 +117,7 @@ class Quadtree {
 
   int ni_ = 0, nj_ = 0, max_level_ = 0;
   std::vector<uint8_t> level_;  // per finest interval (ci * (nj-1) + cj)
+  mutable std::vector<Hanging> hang_;  // scratch for hanging()
 };
 
 template <class F>

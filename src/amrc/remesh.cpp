@@ -10,10 +10,8 @@ void apply_tree(const Quadtree& tree, Cloth& c, double density, bool shear_enabl
 }
 
 void hanging_links(const Quadtree& tree, std::vector<HangingLink>& out) {
-  std::vector<Quadtree::Hanging> hang;
-  tree.hanging(hang);
   out.clear();
-  for (const Quadtree::Hanging& g : hang) out.push_back({g.h, g.a, g.b, g.t});
+  for (const Quadtree::Hanging& g : tree.hanging()) out.push_back({g.h, g.a, g.b, g.t});
 }
 
 }  // namespace drape

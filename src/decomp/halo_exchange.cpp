@@ -54,6 +54,10 @@ HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_
   }
   sbuf_.resize(peers_.size());
   rbuf_.resize(peers_.size());
+  for (size_t k = 0; k < peers_.size(); ++k) {  // the largest message: z's 8 values per particle
+    sbuf_[k].reserve(8 * peers_[k].send.size());
+    rbuf_[k].reserve(8 * peers_[k].recv.size());
+  }
   req_.resize(2 * peers_.size());
 }
 
@@ -65,21 +69,21 @@ int64_t HaloExchange::ghosts() const {
 
 void HaloExchange::exchange(double* z, int blocks) const {
   // Per particle: its 3 positions, then its 5 forces (z's blocks).
-  std::vector<Field> fields;
-  if (blocks & kPositions) fields.push_back({0, 3});
-  if (blocks & kForces) fields.insert(fields.end(), {{3 * n_, 2}, {5 * n_, 2}, {7 * n_, 1}});
-  run(z, fields);
+  const Field all[4] = {{0, 3}, {3 * n_, 2}, {5 * n_, 2}, {7 * n_, 1}};
+  const bool pos = blocks & kPositions, forces = blocks & kForces;
+  run(z, pos ? all : all + 1, (pos ? 1 : 0) + (forces ? 3 : 0));
 }
 
 void HaloExchange::exchange_particles(double* a, int per) const {
-  run(a, {{0, per}});
+  const Field one[1] = {{0, per}};
+  run(a, one, 1);
 }
 
-void HaloExchange::run(double* z, const std::vector<Field>& fields) const {
+void HaloExchange::run(double* z, const Field* fields, int nfields) const {
   if (peers_.empty()) return;
   const double t0 = MPI_Wtime();
   int per = 0;
-  for (const Field& f : fields) per += f.per;
+  for (int q = 0; q < nfields; ++q) per += fields[q].per;
   const int np = int(peers_.size());
   const int tag = 0x4a10;
   for (int k = 0; k < np; ++k) {
@@ -91,8 +95,8 @@ void HaloExchange::run(double* z, const std::vector<Field>& fields) const {
     b.resize(peers_[k].send.size() * per);
     size_t u = 0;
     for (int64_t p : peers_[k].send)
-      for (const Field& f : fields)
-        for (int c = 0; c < f.per; ++c) b[u++] = z[f.offset + f.per * p + c];
+      for (int q = 0; q < nfields; ++q)
+        for (int c = 0; c < fields[q].per; ++c) b[u++] = z[fields[q].offset + fields[q].per * p + c];
     MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, peers_[k].rank, tag, comm_, &req_[np + k]);
     bytes += int64_t(b.size() * sizeof(double));
   }
@@ -100,8 +104,8 @@ void HaloExchange::run(double* z, const std::vector<Field>& fields) const {
   for (int k = 0; k < np; ++k) {
     size_t u = 0;
     for (int64_t p : peers_[k].recv)
-      for (const Field& f : fields)
-        for (int c = 0; c < f.per; ++c) z[f.offset + f.per * p + c] = rbuf_[k][u++];
+      for (int q = 0; q < nfields; ++q)
+        for (int c = 0; c < fields[q].per; ++c) z[fields[q].offset + fields[q].per * p + c] = rbuf_[k][u++];
   }
   ++exchanges;
   seconds += MPI_Wtime() - t0;

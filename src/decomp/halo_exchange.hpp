@@ -38,7 +38,7 @@ class HaloExchange : public Halo {
     int64_t offset;
     int per;
   };
-  void run(double* data, const std::vector<Field>& fields) const;
+  void run(double* data, const Field* fields, int nfields) const;
 
   struct Peer {
     int rank;

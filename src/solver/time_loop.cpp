@@ -164,7 +164,8 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   cs.tolerance = spec_.tolerance;
   cs.numeric = spec_.gradient == GradientMode::Numeric;
   cs.free_particles = free_;
-  cs.stop_requested = stop_requested;
+  // A one-pointer capture: no allocation, whatever stop_requested holds.
+  cs.stop_requested = [this] { return stop_requested && stop_requested(); };
   CgResult r;
   for (;;) {
     m_.dt = c_.dt;

@@ -1,0 +1,69 @@
+// No heap allocation during time steps once a run has started, AMRC on:
+// every operator new is counted while steps run and the mesh adapts.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "amrc/amrc.hpp"
+#include "amrc/remesh.hpp"
+#include "world.hpp"
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+}  // namespace
+
+void* operator new(std::size_t n) {
+  if (g_counting) ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace drape::test {
+namespace {
+
+TEST(Allocation, NoneDuringTimeStepsWithAmrc) {
+  Scene s;  // the box scene, small
+  s.cloth.particles = {33, 33};
+  s.cloth.tile = 8;
+  s.cloth.height = 0.42;
+  World w(s, test_fabric());
+  Amrc amrc(w.cloth, 2);
+  std::vector<int> all(w.tiling.count());
+  for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
+  w.lists.hanging.reserve(w.cloth.grid.n());
+  auto rebuild = [&] {
+    build_active_lists(w.cloth, w.tiling, all, w.lists);
+    hanging_links(amrc.tree(), w.lists.hanging);
+    w.loop->mesh_changed();
+  };
+  amrc.apply(w.cloth, w.fabric.density, s.cloth.shear);
+  rebuild();
+  Timers tm;
+  int changes = 0, iterations = 0;
+  auto run = [&](int steps) {
+    for (int k = 0; k < steps; ++k) {
+      iterations += w.loop->step(tm).iterations;
+      const AdaptStats a = amrc.adapt(w.cloth, w.fabric.density, s.cloth.shear, 0.1, 0.02);
+      if (a.refined + a.coarsened > 0) {
+        rebuild();
+        ++changes;
+      }
+    }
+  };
+  run(3);  // the first steps size every buffer and start OpenMP's threads
+  changes = iterations = 0;
+  g_counting = true;
+  run(25);
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations during 25 steps";
+  EXPECT_GT(changes, 0) << "the mesh should have adapted while counting";
+  EXPECT_GT(iterations, 0) << "the solver should have worked while counting";
+}
+
+}  // namespace
+}  // namespace drape::test
