@@ -33,6 +33,9 @@ class Amrc {
   // Applies the current tree to the cloth (marks, topology, geometry, masses).
   void apply(Cloth& c, double density, bool shear) const;
 
+  // Whether p became active in the last adaptation.
+  bool became_active(const Cloth& c, int64_t p) const { return c.active(p) && !was_active_[p]; }
+
   // Puts inactive particles on the bilinear surface of their leaf.
   void fill_inactive(Cloth& c) const;
 
