@@ -8,17 +8,14 @@
 #include <cmath>
 #include <limits>
 
+#include "decomp/collective.hpp"
 #include "decomp/decomposition.hpp"
 #include "io/error.hpp"
 
 namespace drape::test {
 namespace {
 
-int rank() {
-  int r;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
+int rank() { return rank_of(MPI_COMM_WORLD); }
 
 // An awkward grid: tiles clipped at both far borders.
 const Tiling kTiling(23, 19, 4);

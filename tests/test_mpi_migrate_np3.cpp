@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 
+#include "decomp/collective.hpp"
 #include "decomp/halo_exchange.hpp"
 #include "decomp/migrate.hpp"
 #include "decomp/partition.hpp"
@@ -19,11 +20,7 @@
 namespace drape::test {
 namespace {
 
-int rank() {
-  int r;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
+int rank() { return rank_of(MPI_COMM_WORLD); }
 
 double code(int owner, int64_t p, int field) { return owner * 1e7 + double(p) * 20 + field; }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include "decomp/collective.hpp"
 #include "decomp/reduction.hpp"
 #include "solver/checksum.hpp"
 #include "world.hpp"
@@ -11,11 +12,7 @@
 namespace drape::test {
 namespace {
 
-int rank() {
-  int r;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
+int rank() { return rank_of(MPI_COMM_WORLD); }
 
 // Tile t's partial: order-sensitive magnitudes (1e16 swallows small terms).
 double partial(int t, int row) { return (t % 3 == 0 ? 1e16 : 1.0 + t * 1e-3) * (row + 1) * (t % 2 ? -1 : 1); }
