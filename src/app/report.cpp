@@ -1,0 +1,160 @@
+// report.json and the closing tables (see report.hpp).
+#include "app/report.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "app/signals.hpp"
+#include "io/json.hpp"
+#include "solver/contact.hpp"
+
+namespace drape {
+
+Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) {
+  Table2 t;
+  const double wall = b.wall - a.wall, busy = b.busy - a.busy;
+  t.time = time;
+  t.sequential = std::max(0.0, time - wall);
+  t.parallel = std::max(0.0, wall - busy / threads);
+  t.speedup = time > 0 ? (busy + t.sequential) / time : 1.0;
+  return t;
+}
+
+
+DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {
+  DecompStats s;
+  s.tiles = tl.count();
+  s.tile = tl.t;
+  s.imbalance = d.partition.imbalance;
+  s.edge_cut = d.partition.edge_cut;
+  int64_t mine[2] = {d.halo ? d.halo->ghosts() : 0, d.halo ? d.halo->bytes : 0}, all[2];
+  MPI_Allreduce(mine, all, 2, MPI_INT64_T, MPI_SUM, comm);
+  s.ghosts = all[0];
+  s.halo_bytes = all[1];
+  s.exchanges = d.halo ? d.halo->exchanges : 0;
+  double secs[2] = {d.halo_seconds(), d.reduction_seconds()}, most[2];
+  MPI_Allreduce(secs, most, 2, MPI_DOUBLE, MPI_MAX, comm);
+  s.halo_seconds = most[0];
+  s.reduction_seconds = most[1];
+  return s;
+}
+
+
+int64_t active_particles(const Cloth& c) {
+  int64_t n = 0;
+  for (uint8_t f : c.flags) n += f & kActive;
+  return n;
+}
+
+double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red) {
+  double worst = 0;
+  for (int64_t p : lists.particles.items)
+    worst = std::max(worst, penetration(m.contact.obstacle, c.x() + 3 * p));
+  return red.max(worst);
+}
+
+std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& cloth,
+                        const Summary& s, const Timers& tm, double wall, int ranks, int threads,
+                        const std::string& checksum, double penetration_depth, int64_t free_particles) {
+  Json j;
+  j.begin_object();
+  j.value("program", std::string("drape ") + DRAPE_VERSION);
+  j.value("scene", scene.name);
+  j.begin_object("fabric").value("name", fabric.name).value("source", fabric.source)
+      .value("density_kg_m2", fabric.density).end_object();
+  j.value("particles", (long long)cloth.grid.n());
+  j.begin_object("particles_active")
+      .value("min", (long long)s.active_min)
+      .value("max", (long long)s.active_max)
+      .value("final", (long long)s.active_final)
+      .end_object();
+  j.begin_object("amrc")
+      .value("enabled", scene.amrc.enabled)
+      .value("refined", (long long)s.refined)
+      .value("coarsened", (long long)s.coarsened)
+      .end_object();
+  j.begin_array("grid").value(nullptr, cloth.grid.ni).value(nullptr, cloth.grid.nj).end_array();
+  j.value("free_particles", (long long)free_particles);
+  const RunCounters& n = s.counters;
+  j.value("steps", cloth.step);
+  j.value("steps_requested", scene.solver.steps);
+  j.value("restarted_from_step", s.first_step);
+  j.value("iterations", (long long)n.iterations);
+  j.value("evaluations", (long long)n.evaluations);
+  j.value("simulated_seconds", cloth.time);
+  j.value("iterations_per_simulated_second", cloth.time > 0 ? n.iterations / cloth.time : 0.0);
+  j.value("max_iterations_in_a_step", (long long)n.max_step_iterations);
+  j.value("unconverged_steps", (long long)n.unconverged);
+  j.begin_object("dt").value("min", n.dt_min).value("max", n.dt_max).value("last", cloth.dt_prev).end_object();
+  j.begin_object("final_cost")
+      .value("total", s.last.cost.total())
+      .value("newton", s.last.cost.newton)
+      .value("stretch", s.last.cost.stretch)
+      .value("bend", s.last.cost.bend)
+      .value("shear", s.last.cost.shear)
+      .value("per_particle", s.last.cost_per_particle)
+      .end_object();
+  j.value("max_speed", s.last.max_speed);
+  j.value("at_rest", s.at_rest);
+  j.value("stopped_by_wall_limit", s.stopped_by_wall_limit);
+  j.value("stopped_by_signal", s.signal ? signal_name(s.signal) : "");
+  j.value("checkpoint", s.checkpoint);
+  j.value("rest_speed", scene.solver.rest_speed);
+  j.value("max_penetration", penetration_depth);
+  j.value("projections", (long long)n.projections);
+  j.value("total_mass", cloth.total_mass());
+  j.value("wall_seconds", wall);
+  j.begin_object("phases");
+  for (int p = 0; p < kPhases; ++p) j.value(phase_name(p), tm.seconds[p]);
+  j.end_object();
+  j.begin_object("table2")
+      .value("time", s.table2.time)
+      .value("sequential_overhead", s.table2.sequential)
+      .value("parallel_overhead", s.table2.parallel)
+      .value("speedup", s.table2.speedup)
+      .end_object();
+  j.value("ranks", ranks);
+  const DecompStats& d = s.decomp;
+  j.begin_object("decomposition")
+      .value("tiles", d.tiles)
+      .value("tile", d.tile)
+      .value("imbalance", d.imbalance)
+      .value("edge_cut", (long long)d.edge_cut)
+      .value("ghosts", (long long)d.ghosts)
+      .value("halo_exchanges", (long long)d.exchanges)
+      .value("halo_bytes", (long long)d.halo_bytes)
+      .value("halo_seconds", d.halo_seconds)
+      .value("reduction_seconds", d.reduction_seconds)
+      .end_object();
+  j.value("threads", threads);
+  j.value("schedule", to_string(scene.parallel.schedule));
+  j.value("gradient", to_string(scene.solver.gradient));
+  j.value("state_checksum", checksum);
+  j.end_object();
+  return j.str();
+}
+
+void print_table2(const Table2& t, int threads) {
+  std::printf("\nTable 2 (time stepping, %d thread(s)): time %.3f s, sequential overhead %.3f s, "
+              "parallel overhead %.3f s, speed-up %.2f\n",
+              threads, t.time, t.sequential, t.parallel, t.speedup);
+}
+
+void print_timing_table(const Timers& tm, double wall, const std::string& checksum, const DecompStats& d,
+                        int ranks) {
+  std::printf("\n%-16s %12s %8s\n", "phase", "seconds", "share");
+  for (int p = 0; p < kPhases; ++p)
+    std::printf("%-16s %12.3f %7.1f%%\n", phase_name(p), tm.seconds[p],
+                wall > 0 ? 100.0 * tm.seconds[p] / wall : 0.0);
+  if (ranks > 1) {  // inside the phases above; the largest over ranks
+    std::printf("%-16s %12.3f %7.1f%%   (within the phases)\n", "  halo exchange", d.halo_seconds,
+                wall > 0 ? 100.0 * d.halo_seconds / wall : 0.0);
+    std::printf("%-16s %12.3f %7.1f%%   (within the phases)\n", "  reductions", d.reduction_seconds,
+                wall > 0 ? 100.0 * d.reduction_seconds / wall : 0.0);
+  }
+  std::printf("%-16s %12.3f\n", "wall", wall);
+  std::printf("state checksum   %s\n", checksum.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace drape

@@ -1,0 +1,64 @@
+#pragma once
+// The run's figures: the paper's Table 2 columns, the decomposition's
+// figures, the running summary, report.json and rank 0's closing tables.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+
+#include "decomp/decomposition.hpp"
+#include "io/checkpoint.hpp"
+#include "solver/fabric.hpp"
+#include "solver/loops.hpp"
+#include "solver/model.hpp"
+#include "solver/scene.hpp"
+#include "solver/time_loop.hpp"
+#include "solver/timers.hpp"
+
+namespace drape {
+
+// The paper's Table 2 columns for this run's time stepping: the time outside
+// the parallel loops (sequential overhead), the time inside them beyond the
+// busy thread time divided by the threads (parallel overhead: imbalance and
+// synchronisation), and the speed-up this implies over one thread running
+// the same busy work plus the sequential part.
+struct Table2 {
+  double time = 0, sequential = 0, parallel = 0, speedup = 1;
+};
+
+// The decomposition's figures over all ranks (DESIGN §3, issue 5's targets).
+struct DecompStats {
+  int tiles = 0, tile = 0;
+  double imbalance = 1;
+  int64_t edge_cut = 0, ghosts = 0, halo_bytes = 0, exchanges = 0;
+  double halo_seconds = 0, reduction_seconds = 0;  // the largest over ranks
+};
+
+struct Summary {
+  RunCounters counters;  // carried across restarts
+  bool at_rest = false;
+  bool stopped_by_wall_limit = false;
+  int signal = 0;        // the signal that ended the run (0: none)
+  int first_step = 0;    // the restart's step, 0 for a fresh run
+  std::string checkpoint;  // the last checkpoint written, "" if none
+  Table2 table2;
+  StepStats last;
+  DecompStats decomp;
+  int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
+  int64_t refined = 0, coarsened = 0;                         // AMRC operations
+};
+
+Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
+// Collective.
+DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm);
+int64_t active_particles(const Cloth& c);
+// Collective (the reducer's max).
+double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red);
+std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& cloth,
+                        const Summary& s, const Timers& tm, double wall, int ranks, int threads,
+                        const std::string& checksum, double penetration_depth, int64_t free_particles);
+void print_table2(const Table2& t, int threads);
+void print_timing_table(const Timers& tm, double wall, const std::string& checksum, const DecompStats& d,
+                        int ranks);
+
+}  // namespace drape
