@@ -4,6 +4,7 @@
 // over their bands), the same for a given seed in every run.
 #include <random>
 
+#include "amrc/criterion.hpp"
 #include "io/kes.hpp"
 #include "solver/world.hpp"
 
@@ -14,6 +15,23 @@ inline Scene mid_drape_scene(int n, Schedule schedule = Schedule::ActiveLists) {
   scene.cloth.particles = {n, n};
   scene.parallel.schedule = schedule;
   return scene;
+}
+
+// An uneven AMRC mesh like a drape's: coarse (leaves of 4 intervals) except
+// a band at the finest level along a fold across the cloth's third, so that
+// tiles carry very different work.
+inline void uneven_amrc_mesh(World& w) {
+  const int n = w.cloth.grid.ni, m = w.cloth.grid.nj;
+  Quadtree t(n, m, 2);
+  const std::vector<double> flat(size_t(n) * m, 0.0), none;
+  for (int pass = 0; pass < 3; ++pass) adapt(t, flat, 1.0, 0.5);
+  std::vector<double> fold(size_t(n) * m, 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j)
+      if (std::abs(i - n / 3) <= n / 20) fold[size_t(i) * m + j] = 1.0;
+  for (int pass = 0; pass < 3; ++pass) adapt(t, fold, 0.5, 0.1);
+  w.tree = t;
+  w.rebuild();
 }
 
 inline void jitter_mid_drape(World& w, unsigned seed) {

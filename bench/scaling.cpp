@@ -2,7 +2,9 @@
 // CG iterations (the paper's method) on a 1000 x 1000 cloth mid-drape, for
 // each schedule at 1..N threads, all in one process so the ratios come from
 // one run. Prints a table and writes JSON (run/scaling draws the plot).
-//   scaling [--size 1000] [--iterations 100] [--threads N] [--repeat R] [--out scaling.json]
+//   scaling [--size 1000] [--iterations 100] [--threads N] [--repeat R] [--amrc 0|1] [--out scaling.json]
+// --amrc 1: on an uneven AMRC mesh (coarse, with a finest band along a fold),
+// where the tiles' work differs and the schedules differ most.
 // With R > 1 every configuration is timed R times, interleaved (round after
 // round over all of them, so drift on a shared machine hits all alike), and
 // the median is reported.
@@ -28,9 +30,10 @@ struct Row {
   double seconds, speedup, karp_flatt, parallel_overhead, gradient;
 };
 
-double run_once(int n, int iterations, Schedule sc, int threads, double* gradient_seconds) {
+double run_once(int n, int iterations, Schedule sc, int threads, bool amrc, double* gradient_seconds) {
   omp_set_num_threads(threads);
   World w(mid_drape_scene(n, sc), load_fabric("denim-A"));
+  if (amrc) uneven_amrc_mesh(w);
   jitter_mid_drape(w, 7);  // the same state for every run
   TimeLoop& loop = *w.loop;
   Cloth& cloth = w.cloth;
@@ -51,6 +54,7 @@ double run_once(int n, int iterations, Schedule sc, int threads, double* gradien
 int main(int argc, char** argv) {
   using namespace drape;
   int n = 1000, iterations = 100, max_threads = omp_get_num_procs(), repeat = 1;
+  bool amrc = false;
   std::string out = "scaling.json";
   for (int a = 1; a + 1 < argc; a += 2) {
     if (!std::strcmp(argv[a], "--size")) n = std::atoi(argv[a + 1]);
@@ -58,6 +62,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[a], "--threads")) max_threads = std::atoi(argv[a + 1]);
     else if (!std::strcmp(argv[a], "--out")) out = argv[a + 1];
     else if (!std::strcmp(argv[a], "--repeat")) repeat = std::max(1, std::atoi(argv[a + 1]));
+    else if (!std::strcmp(argv[a], "--amrc")) amrc = std::atoi(argv[a + 1]) != 0;
   }
   const Schedule schedules[] = {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided};
   // times[schedule][threads-1] over the rounds
@@ -67,7 +72,7 @@ int main(int argc, char** argv) {
     for (int si = 0; si < 4; ++si)
       for (int p = 1; p <= max_threads; ++p) {
         double grad = 0;
-        times[si][p - 1].push_back(run_once(n, iterations, schedules[si], p, &grad));
+        times[si][p - 1].push_back(run_once(n, iterations, schedules[si], p, amrc, &grad));
         grads[si][p - 1].push_back(grad);
         std::fprintf(stderr, "round %d/%d %s %d thread(s): %.3f s\n", r + 1, repeat,
                      to_string(schedules[si]), p, times[si][p - 1].back());
@@ -98,6 +103,7 @@ int main(int argc, char** argv) {
   j.value("particles", (long long)n * n);
   j.value("iterations", iterations);
   j.value("method", "cg");
+  j.value("amrc", amrc);
   j.value("repeat", repeat);
   j.begin_array("rows");
   for (const Row& r : rows)
