@@ -77,7 +77,9 @@ TEST(Quadtree, RandomSequencesKeepBalanceMassAndHangingParticles) {
         int64_t a = -1, b = -1;
         const bool hangs = t.hanging_parents(p, a, b);
         ASSERT_EQ(hangs, bool(flags[p] & kHanging)) << p;
-        if (!(flags[p] & kActive) || hangs) ASSERT_EQ(mass[p], 0.0) << "particle " << p << " carries mass";
+        if (!(flags[p] & kActive) || hangs) {
+          ASSERT_EQ(mass[p], 0.0) << "particle " << p << " carries mass";
+        }
         if (!hangs) continue;
         ++hanging_seen;
         // Between two active particles on a grid line; in the middle unless
@@ -87,7 +89,9 @@ TEST(Quadtree, RandomSequencesKeepBalanceMassAndHangingParticles) {
         ASSERT_TRUE(a < p && p < b) << "hanging particle " << p << " outside " << a << "-" << b;
         ASSERT_TRUE(a / kNj == b / kNj || a % kNj == b % kNj) << "side " << a << "-" << b << " not on a grid line";
         const bool clipped = b / kNj == kNi - 1 || b % kNj == kNj - 1;
-        if (!clipped) ASSERT_EQ(2 * p, a + b) << "hanging particle " << p << " not in the middle of " << a << "-" << b;
+        if (!clipped) {
+          ASSERT_EQ(2 * p, a + b) << "hanging particle " << p << " not in the middle of " << a << "-" << b;
+        }
       }
     }
     EXPECT_GT(hanging_seen, 0) << "seed " << seed << " never made a hanging particle";
@@ -187,7 +191,9 @@ TEST(Criterion, SharpFoldRefinesToTheFinestLevel) {
   int finest = 0, coarse = 0;
   for (const Cell& c : leaves) {
     const bool touches = c.i <= fold && fold <= t.i_end(c);
-    if (touches) EXPECT_EQ(c.level, 0) << "leaf at " << c.i << "," << c.j << " on the fold";
+    if (touches) {
+      EXPECT_EQ(c.level, 0) << "leaf at " << c.i << "," << c.j << " on the fold";
+    }
     finest += touches && c.level == 0;
     coarse += !touches && c.level == kMaxLevel;
   }

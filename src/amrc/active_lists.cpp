@@ -28,6 +28,38 @@ void build_one(const Tiling& tiling, const std::vector<int>& owned, int per_part
   list.tile_begin[owned.size()] = int64_t(list.items.size());
 }
 
+// Per tile: for each block of z, for each row, the entries of its active
+// unknowns in ascending order (the order of a full tile-ordered dot product).
+void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned, ActiveList& list) {
+  const int64_t n = c.grid.n();
+  list.items.clear();
+  list.tile_begin.assign(owned.size() + 1, 0);
+  for (size_t k = 0; k < owned.size(); ++k) {
+    list.tile_begin[k] = int64_t(list.items.size());
+    const TileRange r = tiling.range(owned[k]);
+    auto rows = [&](auto&& visit) {
+      for (int i = r.i0; i < r.i1; ++i)
+        for (int j = r.j0; j < r.j1; ++j) visit(int64_t(i) * tiling.nj + j);
+    };
+    rows([&](int64_t p) {
+      if (c.free(p))
+        for (int a = 0; a < 3; ++a) list.items.push_back(3 * p + a);
+    });
+    rows([&](int64_t p) {
+      for (int d = 0; d < 2; ++d)
+        if (c.edge_on[2 * p + d]) list.items.push_back(3 * n + 2 * p + d);
+    });
+    rows([&](int64_t p) {
+      for (int d = 0; d < 2; ++d)
+        if (c.triple_on[2 * p + d]) list.items.push_back(5 * n + 2 * p + d);
+    });
+    rows([&](int64_t p) {
+      if (c.shear_on[p]) list.items.push_back(7 * n + p);
+    });
+  }
+  list.tile_begin[owned.size()] = int64_t(list.items.size());
+}
+
 template <class Pred>
 void build_ring(const std::vector<int64_t>& ring, int per_particle, Pred on, ActiveList& list) {
   list.items.clear();
@@ -49,6 +81,7 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
   build_one(tiling, owned, 2, edge, out.edges);
   build_one(tiling, owned, 2, triple, out.triples);
   build_one(tiling, owned, 1, shear, out.shears);
+  build_unknowns(c, tiling, owned, out.unknowns);
   build_ring(ring, 2, edge, out.ring_edges);
   build_ring(ring, 2, triple, out.ring_triples);
   build_ring(ring, 1, shear, out.ring_shears);

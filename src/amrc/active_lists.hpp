@@ -32,6 +32,11 @@ struct ActiveLists {
   ActiveList triples;    // triple slots 2p+d
   ActiveList shears;     // shear slots p
   std::vector<int> tiles;  // the tiles this rank owns, ascending
+  // The unknowns of those tiles as indices into z, tile by tile and in z's
+  // block order within a tile (positions, tensions, moments, shears): vector
+  // updates and dot products run over these only, so the inactive entries of
+  // an AMRC mesh cost nothing.
+  ActiveList unknowns;
   // Elements of the ghost ring (other ranks' tiles, one particle around this
   // rank's): computed here too, because this rank's particles gather their
   // contributions; their cost belongs to their owner. One run, no tiles.

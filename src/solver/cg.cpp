@@ -15,23 +15,13 @@ Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling&
 }
 
 double Minimizer::dot(const double* a, const double* b) {
-  const Layout& L = c_.layout;
-  const int nj = c_.grid.nj;
+  const ActiveList& u = lists_.unknowns;
   const int nt = int(lists_.tiles.size());
-  // Blocks of z: (offset, unknowns per particle).
-  const int64_t off[4] = {L.x(), L.tension(), L.moment(), L.shear()};
-  const int per[4] = {3, 2, 2, 1};
   timed_region([&] {
 #pragma omp for schedule(dynamic, 1) nowait
     for (int t = 0; t < nt; ++t) {
-      const TileRange r = tiling_.range(lists_.tiles[t]);
       double s = 0;
-      for (int blk = 0; blk < 4; ++blk)
-        for (int i = r.i0; i < r.i1; ++i) {
-          const int64_t lo = off[blk] + per[blk] * (int64_t(i) * nj + r.j0);
-          const int64_t hi = off[blk] + per[blk] * (int64_t(i) * nj + r.j1);
-          for (int64_t k = lo; k < hi; ++k) s += a[k] * b[k];
-        }
+      for (int64_t k = u.tile_begin[t]; k < u.tile_begin[t + 1]; ++k) s += a[u.items[k]] * b[u.items[k]];
       partials_[t] = s;
     }
   });
@@ -58,6 +48,8 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
   double* d = d_.data();
   double* zt = zt_.data();
   const double* diag = diag_.data();
+  // Updates touch the unknowns only: everywhere else zt stays z.
+  parallel_for(n, [&](int64_t k) { zt[k] = z[k]; });
   CgResult res;
   {
     ScopedPhase ph(tm, kScaling);
@@ -73,7 +65,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
   double gs;
   {
     ScopedPhase ph(tm, kVector);
-    parallel_for(n, [&](int64_t k) {
+    for_each_listed(lists_.unknowns, [&](int64_t k) {
       s[k] = g[k] / diag[k];
       d[k] = -s[k];
     });
@@ -92,7 +84,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     }
     double gd = dot(g, d);
     if (!(gd < 0)) {  // not a descent direction: restart
-      parallel_for(n, [&](int64_t k) { d[k] = -s[k]; });
+      for_each_listed(lists_.unknowns, [&](int64_t k) { d[k] = -s[k]; });
       gd = -gs;
       steepest = true;
     }
@@ -107,7 +99,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     for (int tries = 0; tries < 30; ++tries) {
       {
         ScopedPhase ph(tm, kVector);
-        parallel_for(n, [&](int64_t k) { zt[k] = z[k] + a * d[k]; });
+        for_each_listed(lists_.unknowns, [&](int64_t k) { zt[k] = z[k] + a * d[k]; });
       }
       CostTerms trial;
       {
@@ -132,7 +124,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
         break;
       }
       // Retry along steepest descent once.
-      parallel_for(n, [&](int64_t k) { d[k] = -s[k]; });
+      for_each_listed(lists_.unknowns, [&](int64_t k) { d[k] = -s[k]; });
       steepest = true;
       alpha_ = 1.0;
       continue;
@@ -147,7 +139,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     std::swap(g, gn);
     const double gs_old = gs;
     const double g_sold = dot(g, s);
-    parallel_for(n, [&](int64_t k) { s[k] = g[k] / diag[k]; });
+    for_each_listed(lists_.unknowns, [&](int64_t k) { s[k] = g[k] / diag[k]; });
     gs = dot(g, s);
     double beta = std::max(0.0, (gs - g_sold) / gs_old);
     if (++since_restart >= st.restart_every) {
@@ -155,7 +147,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
       since_restart = 0;
     }
     steepest = beta == 0;
-    parallel_for(n, [&](int64_t k) { d[k] = -s[k] + beta * d[k]; });
+    for_each_listed(lists_.unknowns, [&](int64_t k) { d[k] = -s[k] + beta * d[k]; });
     c0 = ct;
     ++res.iterations;
     if (on_iteration) on_iteration(res.iterations, c0);

@@ -51,6 +51,13 @@ void parallel_for(int64_t n, F&& f) {
   });
 }
 
+// Element-wise loop over a list's items in equal static chunks.
+template <class F>
+void for_each_listed(const ActiveList& list, F&& f) {
+  const int64_t* items = list.items.data();
+  parallel_for(list.size(), [&](int64_t k) { f(items[k]); });
+}
+
 struct LoopPolicy {
   Schedule schedule = Schedule::ActiveLists;
   int chunk = 4;  // tiles per chunk (dynamic)

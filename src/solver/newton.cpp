@@ -14,7 +14,6 @@ NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots) : c_(cloth), dot
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
-  const int64_t n = c_.layout.size();
   double *b = b_.data(), *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(),
          *kp = kp_.data(), *diag = diag_.data();
   {
@@ -24,7 +23,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-    parallel_for(n, [&](int64_t k) {
+    for_each_listed(ev.lists().unknowns, [&](int64_t k) {
       d[k] = 0;
       r[k] = b[k];
       s[k] = r[k] / diag[k];
@@ -43,17 +42,17 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     const double pkp = dots_.dot(p, kp);
     if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
     const double a = rs / pkp;
-    parallel_for(n, [&](int64_t k) {
+    for_each_listed(ev.lists().unknowns, [&](int64_t k) {
       d[k] += a * p[k];
       r[k] -= a * kp[k];
     });
     ++it;
     if (dots_.dot(r, r) <= target) break;
-    parallel_for(n, [&](int64_t k) { s[k] = r[k] / diag[k]; });
+    for_each_listed(ev.lists().unknowns, [&](int64_t k) { s[k] = r[k] / diag[k]; });
     const double rs_new = dots_.dot(r, s);
     const double beta = rs_new / rs;
     rs = rs_new;
-    parallel_for(n, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
+    for_each_listed(ev.lists().unknowns, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
   }
   return it;
 }
@@ -71,6 +70,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   res.evaluations = 1;
   double c0 = res.cost.total();
   double* zt = zt_.data();
+  parallel_for(n, [&](int64_t k) { zt[k] = z[k]; });  // updates touch the unknowns only
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;
@@ -93,7 +93,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     bool accepted = false;
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
-      parallel_for(n, [&](int64_t k) { zt[k] = z[k] + a * scale * d_[k]; });
+      for_each_listed(ev.lists().unknowns, [&](int64_t k) { zt[k] = z[k] + a * scale * d_[k]; });
       ev.hysteresis_forces(zt);
       const CostTerms trial = ev.evaluate(zt, nullptr);
       ++res.evaluations;
