@@ -2,6 +2,7 @@
 
 #include "amrc/quadtree.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace drape {
@@ -30,12 +31,22 @@ void build_one(const Tiling& tiling, const std::vector<int>& owned, int per_part
 
 // Per tile: for each block of z, for each row, the entries of its active
 // unknowns in ascending order (the order of a full tile-ordered dot product).
-void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned, ActiveList& list) {
+void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned, IndexRuns& runs) {
   const int64_t n = c.grid.n();
-  list.items.clear();
-  list.tile_begin.assign(owned.size() + 1, 0);
+  std::vector<int64_t>& b = runs.bounds;
+  b.clear();
+  runs.tile_begin.assign(owned.size() + 1, 0);
   for (size_t k = 0; k < owned.size(); ++k) {
-    list.tile_begin[k] = int64_t(list.items.size());
+    runs.tile_begin[k] = runs.count();
+    // Extends the tile's last run or starts one (runs never cross tiles).
+    auto add = [&](int64_t u) {
+      if (runs.count() > runs.tile_begin[k] && b.back() == u) {
+        b.back() = u + 1;
+      } else {
+        b.push_back(u);
+        b.push_back(u + 1);
+      }
+    };
     const TileRange r = tiling.range(owned[k]);
     auto rows = [&](auto&& visit) {
       for (int i = r.i0; i < r.i1; ++i)
@@ -43,21 +54,49 @@ void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>
     };
     rows([&](int64_t p) {
       if (c.free(p))
-        for (int a = 0; a < 3; ++a) list.items.push_back(3 * p + a);
+        for (int a = 0; a < 3; ++a) add(3 * p + a);
     });
     rows([&](int64_t p) {
       for (int d = 0; d < 2; ++d)
-        if (c.edge_on[2 * p + d]) list.items.push_back(3 * n + 2 * p + d);
+        if (c.edge_on[2 * p + d]) add(3 * n + 2 * p + d);
     });
     rows([&](int64_t p) {
       for (int d = 0; d < 2; ++d)
-        if (c.triple_on[2 * p + d]) list.items.push_back(5 * n + 2 * p + d);
+        if (c.triple_on[2 * p + d]) add(5 * n + 2 * p + d);
     });
     rows([&](int64_t p) {
-      if (c.shear_on[p]) list.items.push_back(7 * n + p);
+      if (c.shear_on[p]) add(7 * n + p);
     });
   }
-  list.tile_begin[owned.size()] = int64_t(list.items.size());
+  runs.tile_begin[owned.size()] = runs.count();
+}
+
+void build_spans(const IndexRuns& runs, IndexRuns& spans) {
+  const int64_t nr = runs.count();
+  std::vector<int64_t>& s = spans.bounds;
+  s.clear();
+  // Runs are ascending within each tile's block rows; sort the run starts.
+  std::vector<int64_t>& order = spans.tile_begin;  // scratch: run ids by start
+  order.resize(nr);
+  for (int64_t r = 0; r < nr; ++r) order[r] = r;
+  std::sort(order.begin(), order.end(),
+            [&](int64_t x, int64_t y) { return runs.bounds[2 * x] < runs.bounds[2 * y]; });
+  const int64_t piece = 4096;
+  for (int64_t r : order) {
+    int64_t b = runs.bounds[2 * r];
+    const int64_t e = runs.bounds[2 * r + 1];
+    if (!s.empty() && s.back() == b && s.back() - s[s.size() - 2] < piece) {  // extend the last piece
+      const int64_t room = piece - (s.back() - s[s.size() - 2]);
+      const int64_t take = std::min(room, e - b);
+      s.back() += take;
+      b += take;
+    }
+    for (; b < e; b += piece) {
+      s.push_back(b);
+      s.push_back(std::min(e, b + piece));
+    }
+  }
+  spans.tile_begin.clear();
 }
 
 template <class Pred>
@@ -82,6 +121,7 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
   build_one(tiling, owned, 2, triple, out.triples);
   build_one(tiling, owned, 1, shear, out.shears);
   build_unknowns(c, tiling, owned, out.unknowns);
+  build_spans(out.unknowns, out.unknown_spans);
   build_ring(ring, 2, edge, out.ring_edges);
   build_ring(ring, 2, triple, out.ring_triples);
   build_ring(ring, 1, shear, out.ring_shears);

@@ -26,6 +26,14 @@ struct HangingLink {
   double t;
 };
 
+// Index ranges [begin, end) into z, kept per tile: contiguous runs, so that
+// loops over them stay simple and vectorise.
+struct IndexRuns {
+  std::vector<int64_t> bounds;      // begin, end of run 0, begin, end of run 1, ...
+  std::vector<int64_t> tile_begin;  // runs of tile k: [tile_begin[k], tile_begin[k+1])
+  int64_t count() const { return int64_t(bounds.size() / 2); }
+};
+
 struct ActiveLists {
   ActiveList particles;  // free particles (their positions are unknowns)
   ActiveList edges;      // edge slots 2p+d
@@ -36,7 +44,10 @@ struct ActiveLists {
   // block order within a tile (positions, tensions, moments, shears): vector
   // updates and dot products run over these only, so the inactive entries of
   // an AMRC mesh cost nothing.
-  ActiveList unknowns;
+  IndexRuns unknowns;
+  // The same entries in ascending order, adjacent runs merged and cut into
+  // pieces of at most 4096: vector updates stream through z (no tiles).
+  IndexRuns unknown_spans;
   // Elements of the ghost ring (other ranks' tiles, one particle around this
   // rank's): computed here too, because this rank's particles gather their
   // contributions; their cost belongs to their owner. One run, no tiles.

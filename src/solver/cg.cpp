@@ -15,13 +15,14 @@ Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling&
 }
 
 double Minimizer::dot(const double* a, const double* b) {
-  const ActiveList& u = lists_.unknowns;
+  const IndexRuns& u = lists_.unknowns;
   const int nt = int(lists_.tiles.size());
   timed_region([&] {
 #pragma omp for schedule(dynamic, 1) nowait
     for (int t = 0; t < nt; ++t) {
       double s = 0;
-      for (int64_t k = u.tile_begin[t]; k < u.tile_begin[t + 1]; ++k) s += a[u.items[k]] * b[u.items[k]];
+      for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1]; ++r)
+        for (int64_t k = u.bounds[2 * r]; k < u.bounds[2 * r + 1]; ++k) s += a[k] * b[k];
       partials_[t] = s;
     }
   });
@@ -65,7 +66,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
   double gs;
   {
     ScopedPhase ph(tm, kVector);
-    for_each_listed(lists_.unknowns, [&](int64_t k) {
+    for_each_listed(lists_.unknown_spans, [&](int64_t k) {
       s[k] = g[k] / diag[k];
       d[k] = -s[k];
     });
@@ -84,7 +85,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     }
     double gd = dot(g, d);
     if (!(gd < 0)) {  // not a descent direction: restart
-      for_each_listed(lists_.unknowns, [&](int64_t k) { d[k] = -s[k]; });
+      for_each_listed(lists_.unknown_spans, [&](int64_t k) { d[k] = -s[k]; });
       gd = -gs;
       steepest = true;
     }
@@ -99,7 +100,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     for (int tries = 0; tries < 30; ++tries) {
       {
         ScopedPhase ph(tm, kVector);
-        for_each_listed(lists_.unknowns, [&](int64_t k) { zt[k] = z[k] + a * d[k]; });
+        for_each_listed(lists_.unknown_spans, [&](int64_t k) { zt[k] = z[k] + a * d[k]; });
       }
       CostTerms trial;
       {
@@ -124,7 +125,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
         break;
       }
       // Retry along steepest descent once.
-      for_each_listed(lists_.unknowns, [&](int64_t k) { d[k] = -s[k]; });
+      for_each_listed(lists_.unknown_spans, [&](int64_t k) { d[k] = -s[k]; });
       steepest = true;
       alpha_ = 1.0;
       continue;
@@ -139,7 +140,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
     std::swap(g, gn);
     const double gs_old = gs;
     const double g_sold = dot(g, s);
-    for_each_listed(lists_.unknowns, [&](int64_t k) { s[k] = g[k] / diag[k]; });
+    for_each_listed(lists_.unknown_spans, [&](int64_t k) { s[k] = g[k] / diag[k]; });
     gs = dot(g, s);
     double beta = std::max(0.0, (gs - g_sold) / gs_old);
     if (++since_restart >= st.restart_every) {
@@ -147,7 +148,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
       since_restart = 0;
     }
     steepest = beta == 0;
-    for_each_listed(lists_.unknowns, [&](int64_t k) { d[k] = -s[k] + beta * d[k]; });
+    for_each_listed(lists_.unknown_spans, [&](int64_t k) { d[k] = -s[k] + beta * d[k]; });
     c0 = ct;
     ++res.iterations;
     if (on_iteration) on_iteration(res.iterations, c0);

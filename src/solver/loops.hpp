@@ -51,11 +51,16 @@ void parallel_for(int64_t n, F&& f) {
   });
 }
 
-// Element-wise loop over a list's items in equal static chunks.
+// Element-wise loop over index runs, the runs in equal static chunks.
 template <class F>
-void for_each_listed(const ActiveList& list, F&& f) {
-  const int64_t* items = list.items.data();
-  parallel_for(list.size(), [&](int64_t k) { f(items[k]); });
+void for_each_listed(const IndexRuns& runs, F&& f) {
+  const int64_t* b = runs.bounds.data();
+  const int64_t nr = runs.count();
+  timed_region([&] {
+#pragma omp for schedule(static) nowait
+    for (int64_t r = 0; r < nr; ++r)
+      for (int64_t k = b[2 * r]; k < b[2 * r + 1]; ++k) f(k);
+  });
 }
 
 struct LoopPolicy {

@@ -23,7 +23,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-    for_each_listed(ev.lists().unknowns, [&](int64_t k) {
+    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) {
       d[k] = 0;
       r[k] = b[k];
       s[k] = r[k] / diag[k];
@@ -42,17 +42,17 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     const double pkp = dots_.dot(p, kp);
     if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
     const double a = rs / pkp;
-    for_each_listed(ev.lists().unknowns, [&](int64_t k) {
+    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) {
       d[k] += a * p[k];
       r[k] -= a * kp[k];
     });
     ++it;
     if (dots_.dot(r, r) <= target) break;
-    for_each_listed(ev.lists().unknowns, [&](int64_t k) { s[k] = r[k] / diag[k]; });
+    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { s[k] = r[k] / diag[k]; });
     const double rs_new = dots_.dot(r, s);
     const double beta = rs_new / rs;
     rs = rs_new;
-    for_each_listed(ev.lists().unknowns, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
+    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
   }
   return it;
 }
@@ -93,7 +93,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     bool accepted = false;
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
-      for_each_listed(ev.lists().unknowns, [&](int64_t k) { zt[k] = z[k] + a * scale * d_[k]; });
+      for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { zt[k] = z[k] + a * scale * d_[k]; });
       ev.hysteresis_forces(zt);
       const CostTerms trial = ev.evaluate(zt, nullptr);
       ++res.evaluations;
