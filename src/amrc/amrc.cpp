@@ -59,6 +59,23 @@ void Amrc::indicator(const Cloth& c, std::vector<double>& out) const {
 
 void Amrc::apply(Cloth& c, double density, bool shear) const { apply_tree(tree_, c, density, shear); }
 
+void Amrc::lift_new_particles(Cloth& c, const Contact& contact) const {
+  const Obstacle& ob = contact.obstacle;
+  for (int64_t p = 0; p < c.grid.n(); ++p) {
+    if (was_active_[p] || !c.free(p)) continue;
+    double* x = c.x() + 3 * p;
+    if (clearance(ob, x) >= contact.thickness) continue;
+    double y[3] = {x[0], x[1], x[2]};
+    push_out(ob, contact.thickness, y);
+    for (int k = 0; k < 3; ++k) {
+      const double d = y[k] - x[k];
+      x[k] += d;
+      c.x1[3 * p + k] += d;
+      c.x2[3 * p + k] += d;
+    }
+  }
+}
+
 void Amrc::fill_inactive(Cloth& c) const {
   const int64_t n = c.grid.n();
   double* x = c.x();

@@ -11,6 +11,7 @@
 #include "amrc/criterion.hpp"
 #include "amrc/quadtree.hpp"
 #include "solver/cloth.hpp"
+#include "solver/contact.hpp"
 
 namespace drape {
 
@@ -33,8 +34,10 @@ class Amrc {
   // Applies the current tree to the cloth (marks, topology, geometry, masses).
   void apply(Cloth& c, double density, bool shear) const;
 
-  // Whether p became active in the last adaptation.
-  bool became_active(const Cloth& c, int64_t p) const { return c.active(p) && !was_active_[p]; }
+  // Moves the particles the last adaptation made free out of the contact
+  // layer, with their history: on the old leaf's flat surface they may start
+  // inside it (the leaf spanned an edge of the box), with a violent force.
+  void lift_new_particles(Cloth& c, const Contact& contact) const;
 
   // Puts inactive particles on the bilinear surface of their leaf.
   void fill_inactive(Cloth& c) const;

@@ -21,23 +21,6 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) 
 }
 
 
-DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {
-  DecompStats s;
-  s.tiles = tl.count();
-  s.tile = tl.t;
-  s.imbalance = d.partition.imbalance;
-  s.edge_cut = d.partition.edge_cut;
-  int64_t mine[2] = {d.halo ? d.halo->ghosts() : 0, d.halo ? d.halo->bytes : 0}, all[2];
-  MPI_Allreduce(mine, all, 2, MPI_INT64_T, MPI_SUM, comm);
-  s.ghosts = all[0];
-  s.halo_bytes = all[1];
-  s.exchanges = d.halo ? d.halo->exchanges : 0;
-  double secs[2] = {d.halo_seconds(), d.reduction_seconds()}, most[2];
-  MPI_Allreduce(secs, most, 2, MPI_DOUBLE, MPI_MAX, comm);
-  s.halo_seconds = most[0];
-  s.reduction_seconds = most[1];
-  return s;
-}
 
 
 int64_t active_particles(const Cloth& c) {

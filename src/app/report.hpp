@@ -26,13 +26,6 @@ struct Table2 {
   double time = 0, sequential = 0, parallel = 0, speedup = 1;
 };
 
-// The decomposition's figures over all ranks (DESIGN §3, issue 5's targets).
-struct DecompStats {
-  int tiles = 0, tile = 0;
-  double imbalance = 1;
-  int64_t edge_cut = 0, ghosts = 0, halo_bytes = 0, exchanges = 0;
-  double halo_seconds = 0, reduction_seconds = 0;  // the largest over ranks
-};
 
 struct Summary {
   RunCounters counters;  // carried across restarts
@@ -49,8 +42,6 @@ struct Summary {
 };
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
-// Collective.
-DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm);
 int64_t active_particles(const Cloth& c);
 // Collective (the reducer's max).
 double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red);

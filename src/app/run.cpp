@@ -233,23 +233,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.refined += a.refined;
     sum.coarsened += a.coarsened;
     if (a.refined == 0 && a.coarsened == 0) return;
-    // A new particle on its old leaf's flat surface may start inside an
-    // obstacle's contact layer (the leaf spanned an edge of the box): move it
-    // out with its history, so that it does not start with a violent force.
-    const Obstacle& ob = model.contact.obstacle;
-    for (int64_t p = 0; p < cloth.grid.n(); ++p) {
-      if (!amrc->became_active(cloth, p) || !cloth.free(p)) continue;
-      double* x = cloth.x() + 3 * p;
-      if (clearance(ob, x) >= model.contact.thickness) continue;
-      double y[3] = {x[0], x[1], x[2]};
-      push_out(ob, model.contact.thickness, y);
-      for (int k = 0; k < 3; ++k) {
-        const double d = y[k] - x[k];
-        x[k] += d;
-        cloth.x1[3 * p + k] += d;
-        cloth.x2[3 * p + k] += d;
-      }
-    }
+    amrc->lift_new_particles(cloth, model.contact);
     {
       ScopedPhase ph(tm, kLists);
       build_active_lists(cloth, tiling, dec.owned, lists);

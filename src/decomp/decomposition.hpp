@@ -26,6 +26,17 @@ struct Decomposition {
   double reduction_seconds() const { return mpi_reducer ? mpi_reducer->seconds : 0.0; }
 };
 
+// The decomposition's figures over all ranks (DESIGN §3, issue 5's targets).
+struct DecompStats {
+  int tiles = 0, tile = 0;
+  double imbalance = 1;
+  int64_t edge_cut = 0, ghosts = 0, halo_bytes = 0, exchanges = 0;
+  double halo_seconds = 0, reduction_seconds = 0;  // the largest over ranks
+};
+
+// Collective: this decomposition's figures over all ranks.
+DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm);
+
 // Collective. Throws InputError for more ranks than tiles.
 Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm);
 

@@ -267,7 +267,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
       v[1] += c[1];
       v[2] += c[2];
     });
-  }, 1.0);
+  }, 1.0, 0.0);
   return cost;
 }
 
@@ -402,7 +402,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     double dsum = slope * slope * inv2;
     gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
     v[0] = v[1] = v[2] = dsum;
-  }, 2.0);
+  }, 2.0, 1.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.
   parallel_for(nz, [&](int64_t k) {
     if (!(diag[k] > 0)) diag[k] = 1.0;

@@ -108,7 +108,7 @@ class Evaluator {
   void hanging_forces(const double* z);
   void hanging_residuals();
   template <class Own>
-  void hanging_into_ends(double* out, Own&& own, double power);
+  void hanging_into_ends(double* out, Own&& own, double power, double fill);
   void clear_hanging(std::vector<double>& a);
   double window_cost(const double* z, int ic, int jc);
 
@@ -150,9 +150,10 @@ void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vecto
 
 // Per-particle results at hanging particles (own(h, v) computes h's) go to
 // their ends with the weights to `power` (1: gradients and K v; 2: diagonals);
-// the hanging entries themselves end as zero: they are not unknowns.
+// the hanging entries themselves are set to `fill` (0 for a gradient or K v,
+// 1 for a diagonal, like every other entry that is not an unknown).
 template <class Own>
-inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power) {
+inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, double fill) {
   if (lists_.hanging.empty()) return;
   clear_hanging(hpend_);
   for (const HangingLink& g : lists_.hanging) {
@@ -172,7 +173,7 @@ inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power) {
         hpend_[3 * e + k] = 0.0;  // applied once
       }
   for (const HangingLink& g : lists_.hanging)
-    for (int k = 0; k < 3; ++k) out[3 * g.h + k] = power == 1.0 ? 0.0 : 1.0;
+    for (int k = 0; k < 3; ++k) out[3 * g.h + k] = fill;
 }
 
 }  // namespace drape

@@ -118,7 +118,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       out[1] += c[1];
       out[2] += c[2];
     });
-  }, 1.0);
+  }, 1.0, 0.0);
 }
 
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
@@ -168,7 +168,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     double dsum = slope / 3;
     gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
     out[0] = out[1] = out[2] = dsum;
-  }, 2.0);
+  }, 2.0, 1.0);
 }
 
 }  // namespace drape
