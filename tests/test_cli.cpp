@@ -384,3 +384,18 @@ TEST(CliBad, MoreRanksThanTiles) {
   EXPECT_NE(text.find("2 ranks but the cloth has only 1 tile(s)"), std::string::npos) << text;
   EXPECT_FALSE(fs::exists(outdir));
 }
+
+// Keys added with checkpoints and AMRC: out-of-range values and a
+// combination the program cannot run are refused before anything is written.
+TEST(CliBad, CheckpointAndAmrcKeys) {
+  expect_all_refused({
+      {"key_checkpoint_every", {"--set", "output.checkpoint_every=-1"}, {"output.checkpoint_every", ">= 0"}},
+      {"key_end_time", {"--set", "solver.end_time=-0.5"}, {"solver.end_time", ">= 0"}},
+      {"key_amrc_level", {"--set", "amrc.max_level=11"}, {"amrc.max_level", "[0, 10]"}},
+      {"key_amrc_thresholds", {"--set", "amrc.coarsen=0.5"}, {"amrc.coarsen", "amrc.refine"}},
+      {"key_amrc_every", {"--set", "amrc.every=0"}, {"amrc.every", ">= 1"}},
+      {"key_amrc_numeric", {"--set", "cloth.particles=[9,9]", "--set", "amrc.enabled=true", "--set",
+                            "solver.gradient=numeric"},
+       {"amrc.enabled", "analytic"}},
+  });
+}
