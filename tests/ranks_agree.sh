@@ -1,15 +1,19 @@
 #!/usr/bin/env bash
 # End to end: the drape program on 1, 2 and 4 ranks (4 oversubscribed), the
 # cloth split into 25 tiles by METIS, gives the same state checksum and the
-# same drape.h5 datasets, bit for bit, with either solver.
+# same drape.h5 datasets, bit for bit, with either solver; and with AMRC on,
+# where the 2- and 4-rank runs must have rebalanced (tiles migrated) at
+# least once.
 # Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
 sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
-for method in newton cg; do
+amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
+for method in newton cg amrc; do
   args=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
-        --set solver.steps=40 --set output.every=10 --set solver.method=$method --quiet)
+        --set solver.steps=40 --set output.every=10 --quiet)
+  if [[ $method == amrc ]]; then args+=("${amrc[@]}"); else args+=(--set solver.method=$method); fi
   OMP_NUM_THREADS=1 "$drape" "${args[@]}" --output "$work/$method-1"
   for n in 2 4; do
     OMP_NUM_THREADS=1 "$mpiexec" -n $n "$drape" "${args[@]}" --output "$work/$method-$n"
@@ -18,6 +22,12 @@ for method in newton cg; do
     grep -q "\"ranks\": $n" "$work/$method-$n/report.json" || { echo "the report does not say $n ranks"; exit 1; }
     h5diff "$work/$method-1/drape.h5" "$work/$method-$n/drape.h5" /frames /frames ||
       { echo "$method: drape.h5 frames differ between 1 and $n ranks"; exit 1; }
+    if [[ $method == amrc ]]; then
+      moved=$(python3 -c 'import json,sys; print(sum(r["tiles_moved"] for r in json.load(open(sys.argv[1]))["rebalances"]))' \
+              "$work/$method-$n/report.json")
+      (( moved > 0 )) || { echo "amrc: no tile migrated on $n ranks: the test does not cover a rebalance"; exit 1; }
+      echo "amrc: $n ranks rebalanced, $moved tile move(s) in all"
+    fi
     echo "$method: 1 and $n ranks agree: $one"
   done
   grep -q '"iterations": [1-9]' "$work/$method-1/report.json" || { echo "$method: no iterations ran"; exit 1; }

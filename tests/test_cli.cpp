@@ -385,7 +385,7 @@ TEST(CliBad, MoreRanksThanTiles) {
   EXPECT_FALSE(fs::exists(outdir));
 }
 
-// Keys added with checkpoints and AMRC: out-of-range values and a
+// Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a
 // combination the program cannot run are refused before anything is written.
 TEST(CliBad, CheckpointAndAmrcKeys) {
   expect_all_refused({
@@ -394,6 +394,7 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
       {"key_amrc_level", {"--set", "amrc.max_level=11"}, {"amrc.max_level", "[0, 10]"}},
       {"key_amrc_thresholds", {"--set", "amrc.coarsen=0.5"}, {"amrc.coarsen", "amrc.refine"}},
       {"key_amrc_every", {"--set", "amrc.every=0"}, {"amrc.every", ">= 1"}},
+      {"key_imbalance", {"--set", "parallel.imbalance=0.9"}, {"parallel.imbalance", ">= 1"}},
       {"key_amrc_numeric", {"--set", "cloth.particles=[9,9]", "--set", "amrc.enabled=true", "--set",
                             "solver.gradient=numeric"},
        {"amrc.enabled", "analytic"}},

@@ -46,15 +46,29 @@ Amrc::Amrc(const Cloth& c, int max_level)
   shear_on_ = c.shear_on;
 }
 
-void Amrc::indicator(const Cloth& c, std::vector<double>& out) const {
+void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
   const int64_t n = c.grid.n();
   out.assign(n, 0.0);
   const double* x = c.x();
-#pragma omp parallel for schedule(static)
-  for (int64_t p = 0; p < n; ++p)
+  auto at = [&](int64_t p) {
     for (int d = 0; d < 2; ++d)
       if (c.triple_on[2 * p + d])
         out[p] = std::max(out[p], turning_angle(x + 3 * c.prev[d][p], x + 3 * p, x + 3 * c.next[d][p]));
+  };
+  if (!share.tiling) {
+#pragma omp parallel for schedule(static)
+    for (int64_t p = 0; p < n; ++p) at(p);
+    return;
+  }
+  const Tiling& tl = *share.tiling;
+  const std::vector<int>& tiles = *share.tiles;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t k = 0; k < tiles.size(); ++k) {
+    const TileRange r = tl.range(tiles[k]);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) at(int64_t(i) * tl.nj + j);
+  }
+  share.reducer->max_each(out.data(), n);  // each particle's value from its owner
 }
 
 void Amrc::apply(Cloth& c, double density, bool shear) const { apply_tree(tree_, c, density, shear); }
@@ -91,8 +105,9 @@ void Amrc::fill_inactive(Cloth& c) const {
   }
 }
 
-AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, double coarsen) {
-  indicator(c, indicator_);
+AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
+                        const AdaptShare& share) {
+  indicator(c, share, indicator_);
   old_ = tree_;
   const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen, cells_);
   if (st.refined == 0 && st.coarsened == 0) return st;

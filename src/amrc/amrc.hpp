@@ -10,10 +10,20 @@
 
 #include "amrc/criterion.hpp"
 #include "amrc/quadtree.hpp"
+#include "decomp/tiles.hpp"
 #include "solver/cloth.hpp"
 #include "solver/contact.hpp"
+#include "solver/reducer.hpp"
 
 namespace drape {
+
+// Where a rank computes the criterion: its tiles; `reducer` makes the field
+// whole on every rank, so every rank adapts its copy of the tree alike.
+struct AdaptShare {
+  const Tiling* tiling = nullptr;  // none: every particle (one rank)
+  const std::vector<int>* tiles = nullptr;
+  const Reducer* reducer = nullptr;
+};
 
 class Amrc {
  public:
@@ -25,11 +35,14 @@ class Amrc {
 
   // The criterion per particle: the largest turning angle (rad) of the mesh
   // lines through it, at its active triples; 0 elsewhere.
-  void indicator(const Cloth& c, std::vector<double>& out) const;
+  void indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
 
   // One adaptation of the tree to the cloth; when the mesh changes, carries
   // the state over and rebuilds the cloth's mesh (the caller rebuilds lists).
-  AdaptStats adapt(Cloth& c, double density, bool shear, double refine, double coarsen);
+  // With several ranks each carries the state of its own particles (and of
+  // its ghosts, which must be current, hanging ones included).
+  AdaptStats adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
+                   const AdaptShare& share = {});
 
   // Applies the current tree to the cloth (marks, topology, geometry, masses).
   void apply(Cloth& c, double density, bool shear) const;

@@ -109,6 +109,17 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("halo_seconds", d.halo_seconds)
       .value("reduction_seconds", d.reduction_seconds)
       .end_object();
+  j.begin_array("rebalances");
+  for (const Rebalance& r : s.rebalances)
+    j.begin_object()
+        .value("after_step", r.step)
+        .value("imbalance_before", r.imbalance_before)
+        .value("imbalance_after", r.imbalance_after)
+        .value("tiles_moved", r.tiles_moved)
+        .value("bytes_moved", (long long)r.bytes_moved)
+        .value("edge_cut", (long long)r.edge_cut)
+        .end_object();
+  j.end_array();
   j.value("threads", threads);
   j.value("schedule", to_string(scene.parallel.schedule));
   j.value("gradient", to_string(scene.solver.gradient));

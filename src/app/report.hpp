@@ -7,6 +7,7 @@
 #include <string>
 
 #include "decomp/decomposition.hpp"
+#include "decomp/rebalance.hpp"
 #include "io/checkpoint.hpp"
 #include "solver/fabric.hpp"
 #include "solver/loops.hpp"
@@ -39,6 +40,7 @@ struct Summary {
   DecompStats decomp;
   int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
   int64_t refined = 0, coarsened = 0;                         // AMRC operations
+  std::vector<Rebalance> rebalances;                          // after AMRC, several ranks
 };
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);

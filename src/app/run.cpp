@@ -21,6 +21,7 @@
 #include "decomp/collective.hpp"
 #include "decomp/decomposition.hpp"
 #include "decomp/gather.hpp"
+#include "decomp/rebalance.hpp"
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "app/signals.hpp"
@@ -108,9 +109,6 @@ void add_step(RunCounters& n, const StepStats& st) {
 int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm) {
   const auto t0 = std::chrono::steady_clock::now();
   const int rank = rank_of(comm), ranks = size_of(comm);
-  if (ranks > 1 && scene.amrc.enabled)
-    throw InputError("amrc.enabled = true runs on one rank for now (coarse elements reach beyond the "
-                     "ghost particles); run it without mpirun");
   if (scene.amrc.enabled && scene.solver.gradient == GradientMode::Numeric)
     throw InputError("amrc.enabled = true needs solver.gradient = \"analytic\" (the difference windows "
                      "do not follow hanging particles)");
@@ -147,14 +145,17 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
-    dec = decompose(cloth, tiling, comm);  // refuses more ranks than tiles
+    // refuses more ranks than tiles
+    dec = decompose(cloth, tiling, comm, ghost_widths(scene.amrc.enabled, scene.amrc.max_level));
   }
   make_output_dir(opt.output_dir, comm, rank);
-  {
+  const std::vector<int64_t> no_ring;
+  auto rebuild_lists = [&] {
     ScopedPhase ph(tm, kLists);
-    build_active_lists(cloth, tiling, dec.owned, lists, dec.halo ? dec.halo->ring() : std::vector<int64_t>{});
+    build_active_lists(cloth, tiling, dec.owned, lists, dec.halo ? dec.halo->ring() : no_ring);
     if (amrc) hanging_links(amrc->tree(), lists.hanging);
-  }
+  };
+  rebuild_lists();
   sum.active_min = sum.active_max = sum.active_final = active_particles(cloth);
   const std::vector<int>& owned = dec.owned;
   const Reducer& red = *dec.reducer;
@@ -163,14 +164,24 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   if (opt.restart) loop.minimizer().set_first_step(opt.restart->counters.cg_first_step);
   // Each rank writes its own tiles' blocks of every collective file.
   std::vector<Block> blocks;
-  for (int t : owned) {
-    const TileRange r = tiling.range(t);
-    blocks.push_back({r.i0, r.i1, r.j0, r.j1});
-  }
+  auto own_blocks = [&] {
+    blocks.clear();
+    for (int t : dec.owned) {
+      const TileRange r = tiling.range(t);
+      blocks.push_back({r.i0, r.i1, r.j0, r.j1});
+    }
+  };
+  own_blocks();
 
   std::unique_ptr<Hdf5Output> h5;
+  // The state as written: ghosts and hanging particles current, inactive
+  // particles on their leaf's surface.
+  auto settle_for_output = [&] {
+    loop.refresh_ghosts(false);
+    if (amrc) amrc->fill_inactive(cloth);
+  };
   auto write_frame = [&] {
-    if (amrc) amrc->fill_inactive(cloth);  // inactive particles on their leaf's surface
+    settle_for_output();
     h5->write_frame(frame_of(cloth, blocks));
   };
   {
@@ -228,18 +239,30 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     AdaptStats a;
     {
       ScopedPhase ph(tm, kAmrc);
-      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen);
+      loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
+      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen,
+                      {&tiling, &dec.owned, &red});
     }
     sum.refined += a.refined;
     sum.coarsened += a.coarsened;
     if (a.refined == 0 && a.coarsened == 0) return;
     amrc->lift_new_particles(cloth, model.contact);
-    {
-      ScopedPhase ph(tm, kLists);
-      build_active_lists(cloth, tiling, dec.owned, lists);
-      hanging_links(amrc->tree(), lists.hanging);
-      loop.mesh_changed();
+    if (ranks > 1) {
+      ScopedPhase ph(tm, kMigrate);
+      Rebalance rb;
+      rb.step = cloth.step;
+      if (rebalance(dec, cloth, tiling, scene.parallel.imbalance, comm, rb)) {
+        own_blocks();
+        sum.rebalances.push_back(rb);
+        if (talk)
+          std::printf("rebalance after step %d: imbalance %.3f -> %.3f, %d tile(s) moved (%.1f kB), "
+                      "edge cut %lld\n",
+                      rb.step, rb.imbalance_before, rb.imbalance_after, rb.tiles_moved,
+                      rb.bytes_moved / 1024.0, (long long)rb.edge_cut);
+      }
     }
+    rebuild_lists();
+    loop.mesh_changed();
     const int64_t active = active_particles(cloth);
     sum.active_min = std::min(sum.active_min, active);
     sum.active_max = std::max(sum.active_max, active);
@@ -286,7 +309,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                       threads);
   sum.decomp = decomp_stats(dec, tiling, comm);
   const double depth = max_penetration(cloth, model, lists, red);
-  if (amrc) amrc->fill_inactive(cloth);  // the state's inactive particles, as written
+  settle_for_output();
   const Checksum ck = state_checksum(cloth, tiling, owned, red);
   {
     ScopedPhase ph(tm, kOutput);

@@ -2,7 +2,13 @@
 
 namespace drape {
 
-Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm) {
+GhostWidths ghost_widths(bool amrc, int max_level) {
+  if (!amrc) return {};
+  const int reach = 1 << max_level;
+  return {4 * reach, 2 * reach};
+}
+
+Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &ranks);
@@ -13,7 +19,7 @@ Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm)
     d.reducer = std::make_unique<LocalReducer>();
     return d;
   }
-  d.halo = std::make_unique<HaloExchange>(tiling, d.partition.owner, comm);
+  d.halo = std::make_unique<HaloExchange>(tiling, d.partition.owner, comm, gw.width, gw.ring);
   auto mpi = std::make_unique<MpiReducer>(comm, tiling.count());
   d.mpi_reducer = mpi.get();
   d.reducer = std::move(mpi);

@@ -37,7 +37,17 @@ struct DecompStats {
 // Collective: this decomposition's figures over all ranks.
 DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm);
 
+// How far, in finest intervals, the ghosts and the element ring reach. On
+// the finest mesh a triple reads its neighbours: ring 1, ghosts 2. With AMRC
+// an element spans up to R = 2^max_level intervals and forces pass along
+// chains of hanging particles (shorter than R), so the elements an owned
+// particle gathers from sit within 2R, and what they read within 4R.
+struct GhostWidths {
+  int width = 2, ring = 1;
+};
+GhostWidths ghost_widths(bool amrc, int max_level);
+
 // Collective. Throws InputError for more ranks than tiles.
-Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm);
+Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw = {});
 
 }  // namespace drape

@@ -23,10 +23,19 @@ void window_owners(const Tiling& tl, const std::vector<int>& owner, int i, int j
 
 }  // namespace
 
-HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_Comm comm, int width)
-    : comm_(comm), n_(int64_t(tl.ni) * tl.nj) {
+HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_Comm comm, int width,
+                           int ring_width)
+    : tiling_(tl), comm_(comm), width_(width), ring_width_(ring_width), n_(int64_t(tl.ni) * tl.nj) {
+  replan(owner);
+}
+
+void HaloExchange::replan(const std::vector<int>& owner) {
+  const Tiling& tl = tiling_;
+  const int width = width_;
   int me = 0;
-  MPI_Comm_rank(comm, &me);
+  MPI_Comm_rank(comm_, &me);
+  peers_.clear();
+  ring_.clear();
   std::map<int, Peer> peers;
   std::vector<int> near, close;
   for (int i = 0; i < tl.ni; ++i)
@@ -44,7 +53,7 @@ HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_
           if (r != me) peers[r].send.push_back(p);
       } else if (std::find(near.begin(), near.end(), me) != near.end()) {
         peers[o].recv.push_back(p);
-        window_owners(tl, owner, i, j, 1, close);
+        window_owners(tl, owner, i, j, ring_width_, close);
         if (std::find(close.begin(), close.end(), me) != close.end()) ring_.push_back(p);
       }
     }
@@ -52,8 +61,8 @@ HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_
     peer.rank = r;
     peers_.push_back(std::move(peer));
   }
-  sbuf_.resize(peers_.size());
-  rbuf_.resize(peers_.size());
+  sbuf_.assign(peers_.size(), {});
+  rbuf_.assign(peers_.size(), {});
   for (size_t k = 0; k < peers_.size(); ++k) {  // the largest message: z's 8 values per particle
     sbuf_[k].reserve(8 * peers_[k].send.size());
     rbuf_[k].reserve(8 * peers_[k].recv.size());

@@ -1,7 +1,9 @@
 #pragma once
 // Halo exchange (DESIGN §3): each rank's ghosts are the particles of other
-// ranks within `width` (2) of its own, in the max norm, so that the ring of
-// elements one particle around its tiles can be computed locally. The plan
+// ranks within `width` of its own, in the max norm, so that the ring of
+// elements within `ring_width` around its tiles can be computed locally. On
+// the finest mesh that is 2 and 1 (a triple reads its neighbours); AMRC's
+// coarse elements and hanging chains reach further (see ghost_widths). The plan
 // follows from the tile owners alone, which every rank knows: each side
 // lists the particles it sends or receives in ascending global id, so no
 // index travels. An exchange posts every receive first, then sends one
@@ -18,12 +20,16 @@ namespace drape {
 
 class HaloExchange : public Halo {
  public:
-  HaloExchange(const Tiling& tiling, const std::vector<int>& owner, MPI_Comm comm, int width = 2);
+  HaloExchange(const Tiling& tiling, const std::vector<int>& owner, MPI_Comm comm, int width = 2,
+               int ring_width = 1);
+
+  // A new plan for new tile owners (after a migration), same widths.
+  void replan(const std::vector<int>& owner);
 
   void exchange(double* z, int blocks) const override;
   void exchange_particles(double* a, int per) const override;
 
-  // Ghosts within one particle of this rank's (ascending): the element ring.
+  // Ghosts within ring_width of this rank's (ascending): the element ring.
   const std::vector<int64_t>& ring() const { return ring_; }
   int64_t ghosts() const;
   int neighbours() const { return int(peers_.size()); }
@@ -44,7 +50,9 @@ class HaloExchange : public Halo {
     int rank;
     std::vector<int64_t> send, recv;  // particle ids, ascending
   };
+  Tiling tiling_;
   MPI_Comm comm_;
+  int width_, ring_width_;
   int64_t n_ = 0;  // particles in the grid
   std::vector<Peer> peers_;
   std::vector<int64_t> ring_;

@@ -71,6 +71,14 @@ void fill_stats(const Tiling& tl, const std::vector<int64_t>& work, int parts, P
 
 }  // namespace
 
+Partition partition_with(const Tiling& tl, const std::vector<int>& owner, const std::vector<int64_t>& work,
+                         int parts) {
+  Partition p;
+  p.owner = owner;
+  fill_stats(tl, work, parts, p);
+  return p;
+}
+
 Partition partition_graph(const Tiling& tl, const std::vector<int64_t>& work, int parts) {
   Partition p;
   const int n = tl.count();

@@ -25,6 +25,10 @@ struct Partition {
 // Work per tile: free particles plus active edges, triples and shear corners.
 std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling);
 
+// The figures (work per rank, imbalance, edge cut) of a given owner map.
+Partition partition_with(const Tiling& tiling, const std::vector<int>& owner, const std::vector<int64_t>& work,
+                         int parts);
+
 // METIS_PartGraphKway into `parts` parts (all tiles to rank 0 for one part).
 // Throws std::runtime_error when METIS fails.
 Partition partition_graph(const Tiling& tiling, const std::vector<int64_t>& work, int parts);

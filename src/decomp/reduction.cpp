@@ -39,4 +39,12 @@ int64_t MpiReducer::sum_i64(int64_t v) const {
   return v;
 }
 
+void MpiReducer::max_each(double* a, int64_t n) const {
+  const double t0 = MPI_Wtime();
+  const int64_t piece = int64_t(1) << 30;  // MPI counts are int
+  for (int64_t k = 0; k < n; k += piece)
+    MPI_Allreduce(MPI_IN_PLACE, a + k, int(std::min(piece, n - k)), MPI_DOUBLE, MPI_MAX, comm_);
+  seconds += MPI_Wtime() - t0;
+}
+
 }  // namespace drape

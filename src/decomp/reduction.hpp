@@ -17,6 +17,7 @@ class MpiReducer : public Reducer {
   double max(double v) const override;
   uint64_t sum_u64(uint64_t v) const override;
   int64_t sum_i64(int64_t v) const override;
+  void max_each(double* a, int64_t n) const override;
 
   mutable double seconds = 0;  // in sum_tiles and max, this rank
 

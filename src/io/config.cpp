@@ -75,6 +75,7 @@ const KeySpec kKeys[] = {
     {"parallel", "schedule", Kind::String},
     {"parallel", "chunk", Kind::Int},
     {"parallel", "threads", Kind::Int},
+    {"parallel", "imbalance", Kind::Float},
     {"amrc", "enabled", Kind::Bool},
     {"amrc", "max_level", Kind::Int},
     {"amrc", "refine", Kind::Float},
@@ -492,6 +493,7 @@ void read_scene(const Config& cfg, Scene& s) {
              {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided});
   r.get("parallel.chunk", s.parallel.chunk);
   r.get("parallel.threads", s.parallel.threads);
+  r.get("parallel.imbalance", s.parallel.imbalance);
   r.get("amrc.enabled", s.amrc.enabled);
   r.get("amrc.max_level", s.amrc.max_level);
   r.get("amrc.refine", s.amrc.refine);
@@ -572,6 +574,8 @@ void validate(const Config& cfg, const Scene& s) {
   check(s.parallel.chunk >= 1, "parallel.chunk", "must be >= 1, got " + std::to_string(s.parallel.chunk));
   check(s.parallel.threads >= 0 && s.parallel.threads <= 1024, "parallel.threads",
         "must be in [0, 1024] (0: OpenMP default), got " + std::to_string(s.parallel.threads));
+  check(s.parallel.imbalance >= 1.0, "parallel.imbalance",
+        "must be >= 1 (max / mean work per rank)" + got(s.parallel.imbalance));
   const auto& a = s.amrc;
   check(a.max_level >= 0 && a.max_level <= 10, "amrc.max_level",
         "must be in [0, 10], got " + std::to_string(a.max_level));
@@ -682,9 +686,10 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "schedule", quote(to_string(p.schedule)), "active-lists | static | dynamic | guided");
   line(os, "chunk", std::to_string(p.chunk), "tiles per chunk (dynamic schedule)");
   line(os, "threads", std::to_string(p.threads), "0: OMP_NUM_THREADS / OpenMP default");
+  line(os, "imbalance", format_double(p.imbalance), "max / mean work per rank that triggers a rebalance after AMRC");
   const auto& a = s.amrc;
   os << "\n[amrc]\n";
-  line(os, "enabled", b(a.enabled), "adaptive refinement and coarsening (one rank)");
+  line(os, "enabled", b(a.enabled), "adaptive refinement and coarsening");
   line(os, "max_level", std::to_string(a.max_level), "coarsest leaves span 2^max_level intervals");
   line(os, "refine", format_double(a.refine), "rad: split where a triple turns more");
   line(os, "coarsen", format_double(a.coarsen), "rad: merge where all turn less (< refine)");

@@ -18,6 +18,9 @@ class Reducer {
   virtual double max(double v) const = 0;
   virtual uint64_t sum_u64(uint64_t v) const = 0;  // wrapping sum (checksums)
   virtual int64_t sum_i64(int64_t v) const = 0;
+  // a[k] = the largest of the ranks' a[k], for k < n: a field that each rank
+  // fills where it owns (0 elsewhere, values >= 0) becomes whole everywhere.
+  virtual void max_each(double* a, int64_t n) const = 0;
 };
 
 // One rank: the owned tiles are all tiles.
@@ -35,6 +38,7 @@ class LocalReducer : public Reducer {
   double max(double v) const override { return v; }
   uint64_t sum_u64(uint64_t v) const override { return v; }
   int64_t sum_i64(int64_t v) const override { return v; }
+  void max_each(double*, int64_t) const override {}
 };
 
 }  // namespace drape

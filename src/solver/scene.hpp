@@ -63,6 +63,7 @@ struct ParallelSpec {
   Schedule schedule = Schedule::ActiveLists;
   int chunk = 4;                // tiles per chunk for the dynamic schedule
   int threads = 0;              // 0: OMP_NUM_THREADS / OpenMP default
+  double imbalance = 1.05;      // max / mean work per rank above which AMRC's new mesh is repartitioned
 };
 
 // AMRC (DESIGN §2): the criterion is the turning angle of the mesh at each

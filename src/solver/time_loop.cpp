@@ -39,6 +39,16 @@ void TimeLoop::freeze_bend_axes() {
   }
 }
 
+void TimeLoop::refresh_ghosts(bool history) {
+  halo_.exchange(c_.z.data(), Halo::kAll);
+  ev_.interpolate_hanging(c_.z.data());
+  if (!history) return;
+  for (std::vector<double>* x : {&c_.x1, &c_.x2}) {
+    halo_.exchange(x->data(), Halo::kPositions);
+    ev_.interpolate_hanging(x->data());
+  }
+}
+
 // The first guess of a step: the history moved on with its velocity and
 // gravity (exact for a free fall); CG corrects where the cloth is held.
 void TimeLoop::predict() {
@@ -158,6 +168,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
   std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.f1.begin());
   halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
+  ev_.interpolate_hanging(c_.x1.data());           // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;

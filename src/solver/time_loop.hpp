@@ -49,6 +49,10 @@ class TimeLoop {
   // The bending axis of every triple from the step-start positions x1.
   void freeze_bend_axes();
 
+  // Ghost and hanging entries of z (and with `history`, of x1 and x2) made
+  // current: before AMRC carries values from old corners, before output.
+  void refresh_ghosts(bool history);
+
  private:
   void predict();
   void stop_at_margin(int64_t p);

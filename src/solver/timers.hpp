@@ -4,10 +4,10 @@
 
 namespace drape {
 
-enum Phase { kSetup, kGradient, kLineSearch, kVector, kScaling, kAmrc, kLists, kOutput, kPhases };
+enum Phase { kSetup, kGradient, kLineSearch, kVector, kScaling, kAmrc, kLists, kMigrate, kOutput, kPhases };
 inline const char* phase_name(int p) {
-  static const char* names[] = {"setup",   "gradient", "line_search", "vector_updates",
-                                "scaling", "amrc",     "list_rebuild", "output"};
+  static const char* names[] = {"setup", "gradient",     "line_search", "vector_updates", "scaling",
+                                "amrc",  "list_rebuild", "migration",   "output"};
   return names[p];
 }
 

@@ -1,0 +1,30 @@
+#pragma once
+// Rebalance after AMRC (DESIGN §3): a new mesh changes each tile's work;
+// when the ranks' loads drift apart by more than the allowed imbalance, the
+// tile graph is partitioned again, the new parts are renamed to overlap the
+// old ones most, the tiles that change owner migrate with their state, and
+// the halo is planned again for the new owners.
+#include <mpi.h>
+
+#include <cstdint>
+
+#include "decomp/decomposition.hpp"
+
+namespace drape {
+
+struct Rebalance {
+  int step = 0;
+  double imbalance_before = 1, imbalance_after = 1;  // max / mean work per rank
+  int tiles_moved = 0;
+  int64_t bytes_moved = 0;  // over all ranks
+  int64_t edge_cut = 0;     // the new partition's
+};
+
+// Collective. Measures the current partition against the cloth's work; above
+// `threshold`, repartitions and migrates when that lowers the imbalance.
+// Returns whether tiles moved; `out` gets the figures (imbalance_before is
+// always set). d.owned, d.partition and d.halo then describe the new layout.
+bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, MPI_Comm comm,
+               Rebalance& out);
+
+}  // namespace drape
