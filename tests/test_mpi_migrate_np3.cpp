@@ -2,6 +2,7 @@
 // particles, bit for bit, and back again; after a migration the halo
 // exchange of the new partition delivers every ghost from its new owner.
 // Values encode the rank that first owned them, the particle and the field.
+// A rebalance moves tiles only when the loads drift apart, then evens them.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -14,6 +15,7 @@
 #include "decomp/halo_exchange.hpp"
 #include "decomp/migrate.hpp"
 #include "decomp/partition.hpp"
+#include "decomp/rebalance.hpp"
 #include "solver/model.hpp"
 #include "world.hpp"
 
@@ -125,6 +127,50 @@ TEST(Migrate, TilesArriveWithEveryValueAndGoBackBitForBit) {
     EXPECT_EQ(c.flags[p], before.flags[p]);
     EXPECT_EQ(c.level[p], before.level[p]);
   }
+}
+
+// After AMRC: a balanced partition stays put; when one rank's tiles lose
+// their work (a coarse region), the tiles are partitioned again, fewer than
+// all move, the loads even out, and the new halo serves every ghost from its
+// new owner.
+TEST(Rebalance, OnlyWhenImbalancedThenEvensTheLoad) {
+  Scene scene = flat_scene(23, 19, 0.22, 0.18);
+  Cloth c = make_cloth(scene, test_fabric());
+  const Tiling tl(23, 19, 4);
+  Decomposition d = decompose(c, tl, MPI_COMM_WORLD);
+  const std::vector<int> first = d.partition.owner;
+  Rebalance rb;
+  EXPECT_FALSE(rebalance(d, c, tl, 10.0, MPI_COMM_WORLD, rb)) << "imbalance " << rb.imbalance_before;
+  EXPECT_EQ(d.partition.owner, first);
+  // Rank 0's tiles go flat: no free particles, no elements (every rank
+  // does the same to its copy of the flags, as AMRC's replicated tree does).
+  for (int64_t p = 0; p < c.grid.n(); ++p) {
+    if (first[tl.tile_of(p)] != 0) continue;
+    c.flags[p] = 0;
+    for (int k = 0; k < 2; ++k) c.edge_on[2 * p + k] = c.triple_on[2 * p + k] = 0;
+    c.shear_on[p] = 0;
+  }
+  for (int64_t p = 0; p < c.grid.n(); ++p)  // positions encode the first owner
+    for (int k = 0; k < 3; ++k) c.z[3 * p + k] = first[tl.tile_of(p)] == rank() ? code(rank(), p, k) : -1;
+  ASSERT_TRUE(rebalance(d, c, tl, 1.05, MPI_COMM_WORLD, rb));
+  EXPECT_GT(rb.imbalance_before, 1.3);
+  EXPECT_LT(rb.imbalance_after, rb.imbalance_before);
+  EXPECT_LE(rb.imbalance_after, 1.2);
+  EXPECT_GT(rb.tiles_moved, 0);
+  EXPECT_LT(rb.tiles_moved, tl.count());
+  EXPECT_EQ(d.owned, d.partition.tiles_of(rank()));
+  EXPECT_DOUBLE_EQ(d.partition.imbalance, rb.imbalance_after);
+  d.halo->exchange(c.z.data(), Halo::kPositions);
+  for (int t : d.owned) {  // own tiles, moved or not
+    const TileRange r = tl.range(t);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) {
+        const int64_t p = c.grid.id(i, j);
+        ASSERT_EQ(c.z[3 * p], code(first[t], p, 0)) << "particle " << p << " on rank " << rank();
+      }
+  }
+  for (int64_t p : d.halo->ring())
+    EXPECT_EQ(c.z[3 * p + 1], code(first[tl.tile_of(p)], p, 1)) << "ghost " << p << " on rank " << rank();
 }
 
 }  // namespace

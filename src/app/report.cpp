@@ -118,6 +118,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
         .value("tiles_moved", r.tiles_moved)
         .value("bytes_moved", (long long)r.bytes_moved)
         .value("edge_cut", (long long)r.edge_cut)
+        .value("method", r.method)
         .end_object();
   j.end_array();
   j.value("threads", threads);

@@ -255,9 +255,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         own_blocks();
         sum.rebalances.push_back(rb);
         if (talk)
-          std::printf("rebalance after step %d: imbalance %.3f -> %.3f, %d tile(s) moved (%.1f kB), "
+          std::printf("rebalance after step %d (%s): imbalance %.3f -> %.3f, %d tile(s) moved (%.1f kB), "
                       "edge cut %lld\n",
-                      rb.step, rb.imbalance_before, rb.imbalance_after, rb.tiles_moved,
+                      rb.step, rb.method, rb.imbalance_before, rb.imbalance_after, rb.tiles_moved,
                       rb.bytes_moved / 1024.0, (long long)rb.edge_cut);
       }
     }

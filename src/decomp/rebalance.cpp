@@ -1,8 +1,57 @@
 #include "decomp/rebalance.hpp"
 
+#include <algorithm>
+
 #include "decomp/migrate.hpp"
 
 namespace drape {
+
+namespace {
+
+// Moves tiles one at a time from the most loaded rank to a neighbouring
+// rank (8-neighbour tiles) while that lowers the largest load, until the
+// imbalance is within `target`. The same on every rank (deterministic ties).
+std::vector<int> diffuse(const Tiling& tl, std::vector<int> owner, const std::vector<int64_t>& work,
+                         int ranks, double target) {
+  std::vector<int64_t> load(ranks, 0);
+  int64_t total = 0;
+  for (int t = 0; t < tl.count(); ++t) {
+    load[owner[t]] += work[t];
+    total += work[t];
+  }
+  for (int moves = 0; moves < tl.count(); ++moves) {
+    int r = 0;
+    for (int k = 1; k < ranks; ++k)
+      if (load[k] > load[r]) r = k;
+    if (double(load[r]) * ranks <= target * double(total)) break;
+    int64_t best = load[r];
+    int bt = -1, bs = -1;
+    for (int t = 0; t < tl.count(); ++t) {
+      if (owner[t] != r) continue;
+      const int ti = t / tl.ntj, tj = t % tl.ntj;
+      for (int di = -1; di <= 1; ++di)
+        for (int dj = -1; dj <= 1; ++dj) {
+          const int ui = ti + di, uj = tj + dj;
+          if (ui < 0 || uj < 0 || ui >= tl.nti || uj >= tl.ntj) continue;
+          const int s = owner[ui * tl.ntj + uj];
+          if (s == r) continue;
+          const int64_t after = std::max(load[r] - work[t], load[s] + work[t]);
+          if (after < best) {
+            best = after;
+            bt = t;
+            bs = s;
+          }
+        }
+    }
+    if (bt < 0) break;  // no single move lowers the largest load
+    load[r] -= work[bt];
+    load[bs] += work[bt];
+    owner[bt] = bs;
+  }
+  return owner;
+}
+
+}  // namespace
 
 bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, MPI_Comm comm,
                Rebalance& out) {
@@ -15,9 +64,16 @@ bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, M
   out.edge_cut = now.edge_cut;
   d.partition = now;
   if (ranks == 1 || now.imbalance <= threshold) return false;
-  const Partition fresh = partition_tiles(tl, work, comm);
-  if (fresh.imbalance >= now.imbalance) return false;  // METIS cannot do better with these tiles
-  const std::vector<int> owner = relabel_to_overlap(now.owner, fresh.owner, work, ranks);
+  // A few boundary tiles moved usually suffice; METIS's fresh parts, even
+  // renamed to overlap the old ones, can move half the cloth.
+  std::vector<int> owner = diffuse(tl, now.owner, work, ranks, threshold);
+  out.method = "diffusion";
+  if (partition_with(tl, owner, work, ranks).imbalance > threshold) {
+    const Partition fresh = partition_tiles(tl, work, comm);
+    if (fresh.imbalance >= now.imbalance) return false;  // METIS cannot do better with these tiles
+    owner = relabel_to_overlap(now.owner, fresh.owner, work, ranks);
+    out.method = "metis";
+  }
   const MigrationStats m = migrate_tiles(c, tl, now.owner, owner, comm);
   d.partition = partition_with(tl, owner, work, ranks);
   d.owned = d.partition.tiles_of(rank);

@@ -1,12 +1,15 @@
 #pragma once
 // Rebalance after AMRC (DESIGN §3): a new mesh changes each tile's work;
-// when the ranks' loads drift apart by more than the allowed imbalance, the
-// tile graph is partitioned again, the new parts are renamed to overlap the
-// old ones most, the tiles that change owner migrate with their state, and
-// the halo is planned again for the new owners.
+// when the ranks' loads drift apart by more than the allowed imbalance,
+// boundary tiles move from the most loaded ranks to their neighbours (few
+// tiles move); if that cannot reach the allowed imbalance, the tile graph is
+// partitioned again with METIS and the new parts renamed to overlap the old
+// ones most. The tiles that change owner migrate with their state, and the
+// halo is planned again for the new owners.
 #include <mpi.h>
 
 #include <cstdint>
+#include <vector>
 
 #include "decomp/decomposition.hpp"
 
@@ -18,6 +21,7 @@ struct Rebalance {
   int tiles_moved = 0;
   int64_t bytes_moved = 0;  // over all ranks
   int64_t edge_cut = 0;     // the new partition's
+  const char* method = "";  // "diffusion" or "metis"
 };
 
 // Collective. Measures the current partition against the cloth's work; above
