@@ -27,10 +27,17 @@ namespace {
 struct Row {
   std::string schedule;
   int threads;
-  double seconds, speedup, karp_flatt, parallel_overhead, gradient;
+  double seconds, speedup, karp_flatt, parallel_overhead, gradient, loops, balance;
 };
 
-double run_once(int n, int iterations, Schedule sc, int threads, bool amrc, double* gradient_seconds) {
+// One timed run's figures: the whole, the gradient's part, and the parallel
+// loops' wall time and balance (busy thread-seconds / (wall x threads): 1 when
+// no thread waits at a loop's end, which is what the schedules differ in).
+struct Timing {
+  double seconds = 0, gradient = 0, loops = 0, balance = 0;
+};
+
+Timing run_once(int n, int iterations, Schedule sc, int threads, bool amrc) {
   omp_set_num_threads(threads);
   World w(mid_drape_scene(n, sc), load_fabric("denim-A"));
   if (amrc) uneven_amrc_mesh(w);
@@ -42,10 +49,15 @@ double run_once(int n, int iterations, Schedule sc, int threads, bool amrc, doub
   cs.tolerance = 0;
   cs.free_particles = loop.free_particles();
   Timers tm;
+  const LoopClock c0 = loop_clock();
   const auto t0 = std::chrono::steady_clock::now();
   loop.minimizer().minimize(loop.evaluator(), cloth.z.data(), cs, tm);
-  *gradient_seconds = tm.seconds[kGradient] + tm.seconds[kLineSearch];
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Timing r;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.gradient = tm.seconds[kGradient] + tm.seconds[kLineSearch];
+  r.loops = loop_clock().wall - c0.wall;
+  r.balance = r.loops > 0 ? (loop_clock().busy - c0.busy) / (r.loops * threads) : 1.0;
+  return r;
 }
 
 }  // namespace
@@ -67,15 +79,17 @@ int main(int argc, char** argv) {
   const Schedule schedules[] = {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided};
   // times[schedule][threads-1] over the rounds
   std::vector<std::vector<std::vector<double>>> times(4, std::vector<std::vector<double>>(max_threads));
-  std::vector<std::vector<std::vector<double>>> grads = times;
+  std::vector<std::vector<std::vector<double>>> grads = times, loops = times, balance = times;
   for (int r = 0; r < repeat; ++r)
     for (int si = 0; si < 4; ++si)
       for (int p = 1; p <= max_threads; ++p) {
-        double grad = 0;
-        times[si][p - 1].push_back(run_once(n, iterations, schedules[si], p, amrc, &grad));
-        grads[si][p - 1].push_back(grad);
-        std::fprintf(stderr, "round %d/%d %s %d thread(s): %.3f s\n", r + 1, repeat,
-                     to_string(schedules[si]), p, times[si][p - 1].back());
+        const Timing t = run_once(n, iterations, schedules[si], p, amrc);
+        times[si][p - 1].push_back(t.seconds);
+        grads[si][p - 1].push_back(t.gradient);
+        loops[si][p - 1].push_back(t.loops);
+        balance[si][p - 1].push_back(t.balance);
+        std::fprintf(stderr, "round %d/%d %s %d thread(s): %.3f s, loops %.3f s, balance %.3f\n", r + 1,
+                     repeat, to_string(schedules[si]), p, t.seconds, t.loops, t.balance);
       }
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -83,19 +97,20 @@ int main(int argc, char** argv) {
     return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
   };
   std::vector<Row> rows;
-  std::printf("%-13s %7s %10s %8s %10s %12s %10s\n", "schedule", "threads", "time [s]", "speed-up",
-              "seq. frac", "par. ovh [s]", "grad [s]");
+  std::printf("%-13s %7s %10s %8s %10s %12s %10s %10s %8s\n", "schedule", "threads", "time [s]", "speed-up",
+              "seq. frac", "par. ovh [s]", "grad [s]", "loops [s]", "balance");
   for (int si = 0; si < 4; ++si) {
     const double t1 = median(times[si][0]);
     for (int p = 1; p <= max_threads; ++p) {
       const double t = median(times[si][p - 1]), grad = median(grads[si][p - 1]);
+      const double lw = median(loops[si][p - 1]), bal = median(balance[si][p - 1]);
       const double sp = t1 / t;
       // Karp-Flatt: the serial fraction implied by the measured speed-up.
       const double e = p > 1 ? (1 / sp - 1.0 / p) / (1 - 1.0 / p) : 0.0;
       const double ovh = t - t1 / p;  // time beyond perfect division
-      rows.push_back({to_string(schedules[si]), p, t, sp, e, ovh, grad});
-      std::printf("%-13s %7d %10.3f %8.2f %10.3f %12.3f %10.3f\n", to_string(schedules[si]), p, t, sp,
-                  e, ovh, grad);
+      rows.push_back({to_string(schedules[si]), p, t, sp, e, ovh, grad, lw, bal});
+      std::printf("%-13s %7d %10.3f %8.2f %10.3f %12.3f %10.3f %10.3f %8.3f\n", to_string(schedules[si]), p,
+                  t, sp, e, ovh, grad, lw, bal);
     }
   }
   Json j;
@@ -115,6 +130,8 @@ int main(int argc, char** argv) {
         .value("serial_fraction", r.karp_flatt)
         .value("parallel_overhead_seconds", r.parallel_overhead)
         .value("gradient_seconds", r.gradient)
+        .value("loop_seconds", r.loops)
+        .value("loop_balance", r.balance)
         .end_object();
   j.end_array();
   j.end_object();

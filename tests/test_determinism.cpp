@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "solver/checksum.hpp"
@@ -96,6 +97,36 @@ TEST(ActiveLists, EveryItemProcessedExactlyOnce) {
         for (int v : seen) total += v;
         ASSERT_EQ(total, n);
       }
+    }
+  }
+}
+
+// The threads' cuts of an active list follow the measured time: on a list
+// whose first half costs three times as much per item, simulated passes move
+// the cuts until the chunks' times agree; the bounds always cover the list.
+TEST(ActiveLists, CutsFollowTheMeasuredTime) {
+  for (int threads : {1, 2, 3, 4}) {
+    for (int64_t n : {0, 1, 2, 5, 1000, 99999}) {
+      ListCuts c;
+      c.reset(n, threads);
+      auto cost = [&](int64_t a, int64_t b) {  // items [a, b): 3 each below n/2, 1 above
+        const int64_t h = n / 2;
+        return 3.0 * double(std::max<int64_t>(0, std::min(b, h) - a)) +
+               double(std::max<int64_t>(0, b - std::max(a, h)));
+      };
+      for (int pass = 0; pass < 30; ++pass) {
+        for (int q = 0; q < threads; ++q) c.seconds[q] = 1e-6 * cost(c.cut[q], c.cut[q + 1]);
+        c.rebalance();
+        ASSERT_EQ(c.cut.front(), 0);
+        ASSERT_EQ(c.cut.back(), n);
+        for (int q = 0; q < threads; ++q) ASSERT_LE(c.cut[q], c.cut[q + 1]);
+      }
+      if (n < 1000 || threads == 1) continue;
+      double most = 0;
+      for (int q = 0; q < threads; ++q) most = std::max(most, cost(c.cut[q], c.cut[q + 1]));
+      const double even = cost(0, n) / threads;
+      EXPECT_LT(most, 1.01 * even) << threads << " threads, n " << n;
+      EXPECT_LT(c.cut[1], n / threads) << "the costly first chunk should have shrunk";
     }
   }
 }

@@ -110,6 +110,39 @@ void build_ring(const std::vector<int64_t>& ring, int per_particle, Pred on, Act
 
 }  // namespace
 
+void ListCuts::reset(int64_t n, int threads) {
+  cut.resize(threads + 1);
+  next.resize(threads + 1);
+  seconds.assign(threads, 0.0);
+  for (int t = 0; t <= threads; ++t) cut[t] = n * t / threads;
+}
+
+void ListCuts::rebalance() {
+  const int T = int(cut.size()) - 1;
+  if (T <= 1) return;
+  const int64_t n = cut[T];
+  double total = 0;
+  for (double s : seconds) total += s;
+  if (n == 0 || !(total > 0)) return;
+  const double mean = total / double(n);  // per item, for chunks without items
+  // Where the cumulative measured time (linear within each chunk) reaches
+  // k/T of the total: the cut that would have balanced the last pass.
+  int q = 0;
+  double before = 0;  // time of the chunks before q
+  next[0] = 0;
+  next[T] = n;
+  for (int k = 1; k < T; ++k) {
+    const double want = total * k / T;
+    while (q < T - 1 && before + seconds[q] < want) before += seconds[q++];
+    const int64_t len = cut[q + 1] - cut[q];
+    const double per = len > 0 && seconds[q] > 0 ? seconds[q] / double(len) : mean;
+    const double x = double(cut[q]) + (want - before) / per;
+    next[k] = std::clamp<int64_t>(int64_t(x), cut[q], cut[q + 1]);
+  }
+  for (int k = 1; k < T; ++k)  // halfway: damps the noise of one pass
+    cut[k] = std::clamp<int64_t>(cut[k] + (next[k] - cut[k]) / 2, cut[k - 1], n);
+}
+
 void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned,
                         ActiveLists& out, const std::vector<int64_t>& ring) {
   out.tiles = owned;

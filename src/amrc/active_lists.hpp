@@ -1,8 +1,8 @@
 #pragma once
 // The paper's active lists (§4.3): one list per element type of the slots
 // that are active now, sorted by tile and then by index, with the start of
-// each tile's run. Threads split a list into equal chunks; reductions sum
-// each tile's run in order, so results do not depend on the thread count.
+// each tile's run. Threads split a list into chunks (ListCuts); reductions
+// sum each tile's run in order, so results do not depend on the thread count.
 // Rebuilt after AMRC changes the mesh; capacity is reserved once.
 #include <cstdint>
 #include <vector>
@@ -14,9 +14,26 @@ namespace drape {
 
 class Quadtree;
 
+// How a list is split among the threads: one chunk each. The paper cuts
+// equal counts. On an uneven mesh equal counts are not equal times (a coarse
+// region's elements lie far apart in memory and cost more each), so the cuts
+// start equal and, after every pass, move halfway towards where the threads'
+// measured times would have been equal. Each kind of pass over a list (forces,
+// gradient, ...) has its own cuts: their costs per item differ. Which thread
+// does an item never changes a result (kernels write per slot).
+struct ListCuts {
+  std::vector<int64_t> cut;     // threads + 1 bounds into the list
+  std::vector<int64_t> next;    // scratch for rebalance()
+  std::vector<double> seconds;  // each chunk's time in the last pass
+  bool fits(int64_t n, int threads) const { return int(cut.size()) == threads + 1 && cut.back() == n; }
+  void reset(int64_t n, int threads);  // equal counts
+  void rebalance();                    // serial, after a pass
+};
+
 struct ActiveList {
   std::vector<int64_t> items;       // slot or particle indices
   std::vector<int64_t> tile_begin;  // size tiles+1: items of tile k are [tile_begin[k], tile_begin[k+1])
+  mutable std::vector<ListCuts> cuts;  // the threads' chunks, per kind of pass (loops.hpp)
   int64_t size() const { return int64_t(items.size()); }
 };
 

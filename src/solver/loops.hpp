@@ -1,12 +1,15 @@
 #pragma once
 // The loops that drive the kernels over an active list. The paper's scheme
-// (active lists) splits the list into equal chunks, one per thread; the
+// (active lists) splits the list into chunks, one per thread: equal at
+// first, then cut where the measured times balance (ListCuts); the
 // alternatives hand out whole tiles with OpenMP's static, dynamic or guided
 // schedule (paper Fig. 8). Kernels write per-slot results only, so every
 // schedule gives bitwise the same numbers.
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <type_traits>
 
 #include "amrc/active_lists.hpp"
 #include "solver/scene.hpp"
@@ -68,9 +71,51 @@ struct LoopPolicy {
   int chunk = 4;  // tiles per chunk (dynamic)
 };
 
+// A small number per loop body type: each kind of pass over a list keeps its
+// own cuts. Called between parallel regions only.
+inline int next_pass_kind() {
+  static int n = 0;
+  return n++;
+}
+template <class F>
+int pass_kind() {
+  static const int kind = next_pass_kind();
+  return kind;
+}
+
+// The paper's active lists: one chunk of the list per thread (ListCuts), each
+// chunk timed so that the cuts follow the measured cost of this kind of pass.
+template <class F>
+void for_each_chunk(const ActiveList& list, F&& f) {
+  const int chunks = omp_get_max_threads();
+  constexpr size_t kKinds = 32;  // more kinds of pass share the last cuts
+  if (list.cuts.size() != kKinds) {  // all at once, so a late kind allocates nothing
+    list.cuts.resize(kKinds);
+    for (ListCuts& c : list.cuts) c.reset(list.size(), chunks);
+  }
+  ListCuts& c = list.cuts[std::min(kKinds - 1, size_t(pass_kind<std::decay_t<F>>()))];
+  if (!c.fits(list.size(), chunks)) c.reset(list.size(), chunks);
+  const int64_t* items = list.items.data();
+  const int64_t* cut = c.cut.data();
+  double* seconds = c.seconds.data();
+  timed_region([&] {
+    // One chunk per thread; any other team size still covers every chunk.
+#pragma omp for schedule(static, 1) nowait
+    for (int q = 0; q < chunks; ++q) {
+      const double t0 = omp_get_wtime();
+      for (int64_t k = cut[q]; k < cut[q + 1]; ++k) f(items[k]);
+      seconds[q] = omp_get_wtime() - t0;
+    }
+  });
+  c.rebalance();
+}
+
 template <class F>
 void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
-  const int64_t n = list.size();
+  if (pol.schedule == Schedule::ActiveLists) {
+    for_each_chunk(list, f);
+    return;
+  }
   const int nt = int(list.tile_begin.size()) - 1;
   const int64_t* items = list.items.data();
   const int64_t* tb = list.tile_begin.data();
@@ -78,10 +123,7 @@ void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
   const int chunk = pol.chunk;
   timed_region([&] {
     switch (sc) {
-      case Schedule::ActiveLists:
-#pragma omp for schedule(static) nowait
-        for (int64_t k = 0; k < n; ++k) f(items[k]);
-        break;
+      case Schedule::ActiveLists:  // for_each_chunk
       case Schedule::Static:
 #pragma omp for schedule(static) nowait
         for (int t = 0; t < nt; ++t)
