@@ -116,8 +116,9 @@ TEST(Halo, EveryGhostCarriesItsOwnerAndId) {
       for (int c = 0; c < 3; ++c) rho[3 * p + c] = code(rank(), p, c);
   halo.exchange_particles(rho.data(), 3);
   for (int64_t p = 0; p < n; ++p)
-    if (owner_of(p) != rank() && distance_to_mine(part.owner, p) <= 2)
+    if (owner_of(p) != rank() && distance_to_mine(part.owner, p) <= 2) {
       for (int c = 0; c < 3; ++c) EXPECT_EQ(rho[3 * p + c], code(owner_of(p), p, c)) << p;
+    }
 }
 
 }  // namespace
