@@ -85,7 +85,7 @@ class Evaluator {
   void shear_gradient(int64_t s, const double* z, double* grad);
   void particle_gradient(int64_t p, const double* z, double* grad);
   // Element passes: this rank's elements, then the ghost ring's (split in
-  // equal chunks whatever the schedule: the ring has no tiles).
+  // chunks as active lists whatever the schedule: the ring has no tiles).
   template <class F>
   void for_elements(const ActiveList& owned, const ActiveList& ring, F&& f) {
     for_each_item(owned, pol_, f);
