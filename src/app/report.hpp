@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "decomp/decomposition.hpp"
 #include "decomp/rebalance.hpp"

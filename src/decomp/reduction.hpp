@@ -19,7 +19,7 @@ class MpiReducer : public Reducer {
   int64_t sum_i64(int64_t v) const override;
   void max_each(double* a, int64_t n) const override;
 
-  mutable double seconds = 0;  // in sum_tiles and max, this rank
+  mutable double seconds = 0;  // in sum_tiles, max and max_each, this rank
 
  private:
   MPI_Comm comm_;

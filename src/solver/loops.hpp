@@ -123,7 +123,7 @@ void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
   const int chunk = pol.chunk;
   timed_region([&] {
     switch (sc) {
-      case Schedule::ActiveLists:  // for_each_chunk
+      case Schedule::ActiveLists:  // not reached: for_each_chunk above
       case Schedule::Static:
 #pragma omp for schedule(static) nowait
         for (int t = 0; t < nt; ++t)
