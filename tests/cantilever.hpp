@@ -26,6 +26,11 @@ inline Cantilever run_cantilever(int intervals, double dt, int max_steps, double
   const double h = l / intervals;
   Scene s = flat_scene(intervals + 2, 3, (intervals + 1) * h, 2 * h);
   s.cloth.shear = false;
+  // The bands have zero width, so the force is B kappa whatever the
+  // reversal; 0 keeps Newton's path (its stiffness where the force sits
+  // exactly on the line) as this test was calibrated with: at 5 the strip
+  // creeps on and misses the rest threshold.
+  s.cloth.reversal = 0;
   s.cloth.height = 0.5;
   s.solver.dt = dt;
   s.solver.dt_max = dt;

@@ -37,6 +37,8 @@ Quadtree amrc_tree() {
 World random_world(unsigned seed, bool amrc = false) {
   Scene s = amrc ? flat_scene(13, 11, 0.12, 0.10) : flat_scene(7, 6, 0.06, 0.05);
   s.cloth.height = 0.004;
+  s.cloth.reversal = 5;  // the targets then move inside the bands
+  s.cloth.stretch_reversal = 2;
   s.obstacle.shape = ObstacleShape::Sphere;
   s.obstacle.center = {0.0, 0.0, -0.02};
   s.obstacle.radius = 0.025;
@@ -56,10 +58,16 @@ World random_world(unsigned seed, bool amrc = false) {
   for (int64_t k = L.shear(); k < L.size(); ++k) w.cloth.z[k] = 3.0 * u(rng);
   // The step's history forces: near the current ones, as during a minimisation.
   for (int64_t k = L.tension(); k < L.size(); ++k)
-    w.cloth.f1[k - L.tension()] = w.cloth.z[k] * (1 + 0.05 * u(rng));
+    w.cloth.anchor[k - L.tension()] = w.cloth.z[k] * (1 + 0.05 * u(rng));
   w.model.dt = 2e-3;
   w.model.dt_prev = 1.5e-3;
+  w.model.drag = 4.0;  // air drag in the Newton term
   w.loop->freeze_bend_axes();
+  // As at a step's start: the bands' reversal folds the step-start strains
+  // into the anchors.
+  EXPECT_GT(w.model.bend[0].reversal(), 1.0);
+  EXPECT_GT(w.model.stretch[1].reversal(), 1.0);
+  w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), w.cloth.anchor.data());
   return w;
 }
 

@@ -239,6 +239,95 @@ TEST(KesShipped, HalfWidthsAreHalfThePrintedLoops) {
 }
 
 // The synthesized-curve fabric samples denim-B's model: same fabric, nearly.
+// Drives a band through strains qs, one time step per entry, as the time
+// loop does: the anchor from the step-start force and strain, then the stop.
+std::vector<double> trace(const Band& b, const std::vector<double>& qs) {
+  std::vector<double> f{0.0};
+  for (size_t k = 1; k < qs.size(); ++k) f.push_back(b.stop(b.anchor(f.back(), qs[k - 1]), qs[k]).f);
+  return f;
+}
+
+std::vector<double> ramp(double from, double to, int n, std::vector<double> qs = {}) {
+  for (int i = qs.empty() ? 0 : 1; i <= n; ++i) qs.push_back(from + (to - from) * i / n);
+  return qs;
+}
+
+TEST(BandReversal, SteepReversalCrossesTheBandOverTheStrainItsSlopeGives) {
+  const double B = 2e-5, HB = 7e-4, K = 200, r = 5;  // denim-like bending, SI
+  Band band = Band::linear(B, HB);
+  band.set_reversal(r);
+  std::vector<double> qs = ramp(0, K, 400);
+  qs = ramp(K, -K, 800, qs);
+  const std::vector<double> f = trace(band, qs);
+  // Loading from rest: at r*B until the upper edge, then along it.
+  const double meet = HB / ((r - 1) * B);  // where r*B*q = B*q + HB
+  for (size_t k = 0; k <= 400; ++k) {
+    const double q = qs[k];
+    const double want = q < meet ? r * B * q : B * q + HB;
+    ASSERT_NEAR(f[k], want, 1e-9 * HB) << "loading, q = " << q;
+  }
+  // Unloading from K: down at r*B across the band (2HB in (r-1)*B*dq), then the lower edge.
+  const double across = 2 * HB / ((r - 1) * B);
+  for (size_t k = 401; k < qs.size(); ++k) {
+    const double dq = K - qs[k];
+    const double want = dq < across ? B * K + HB - r * B * dq : B * qs[k] - HB;
+    ASSERT_NEAR(f[k], want, 1e-9 * HB) << "unloading, q = " << qs[k];
+  }
+  // The loop is as wide as the band where both branches lie on its edges.
+  EXPECT_NEAR(f[400 + 400] - (B * 0 - HB), 0.0, 1e-9 * HB);  // q = 0 on the way back
+}
+
+// Work done on the element over the strain path (trapezoids), from entry k0.
+double work(const std::vector<double>& qs, const std::vector<double>& f, size_t k0) {
+  double w = 0;
+  for (size_t k = k0 + 1; k < qs.size(); ++k) w += 0.5 * (f[k] + f[k - 1]) * (qs[k] - qs[k - 1]);
+  return w;
+}
+
+TEST(BandReversal, AClosedCycleDissipatesTheLoopsArea) {
+  const double B = 2e-5, HB = 7e-4, K = 200;
+  const std::vector<double> qs = ramp(-K, K, 2000, ramp(K, -K, 2000, ramp(0, K, 1000)));
+  Band steep = Band::linear(B, HB);
+  steep.set_reversal(5);
+  // A parallelogram: 2HB high, 2K wide less the strain one reversal takes.
+  const double area = 2 * HB * (2 * K - 2 * HB / (4 * B));
+  EXPECT_NEAR(work(qs, trace(steep, qs), 1000), area, 1e-3 * area);
+  // The band taken literally keeps the force while the strain moves, so it
+  // loads along the lower edge and unloads along the upper one: the loop runs
+  // backwards and each cycle gives energy to the cloth instead of taking it.
+  const Band literal = Band::linear(B, HB);
+  const double back = -2 * HB * (2 * K - 2 * HB / B);
+  EXPECT_NEAR(work(qs, trace(literal, qs), 1000), back, 1e-3 * area);
+}
+
+TEST(BandReversal, ZeroIsTheLiteralBandAndInsideTheSplitOfStepsDoesNotMatter) {
+  const double B = 2e-5, HB = 7e-4, K = 200;
+  Band literal = Band::linear(B, HB);
+  const std::vector<double> qs = ramp(K, K - 30, 30, ramp(0, K, 100));
+  const std::vector<double> f = trace(literal, qs);
+  for (size_t k = 101; k < qs.size(); ++k)  // within 2HB/B = 70 of K: the force stays put
+    ASSERT_EQ(f[k], f[100]) << "q = " << qs[k];
+  // With a reversal, one long step inside the band lands where many short ones do.
+  TensileKES kes;
+  kes.lt = 0.62;
+  kes.emt = 0.07;
+  kes.rt = 0.65;
+  Band steep = Band::tensile(kes);
+  steep.set_reversal(8);
+  const double q0 = 0.05, f0 = steep.at(q0).hi;  // on the loading curve, then back a little
+  const double q = q0 - 5e-4;
+  const double one = steep.stop(steep.anchor(f0, q0), q).f;
+  double many = f0;
+  for (int i = 1; i <= 20; ++i)
+    many = steep.stop(steep.anchor(many, q0 - 2.5e-5 * (i - 1)), q0 - 2.5e-5 * i).f;
+  EXPECT_GT(one, steep.at(q).lo);
+  EXPECT_LT(one, steep.at(q).hi);
+  EXPECT_NEAR(one, many, 1e-12 * f0);
+  // Its slope inside the band is reversal times the loading curve's.
+  const Band::Stop st = steep.stop(steep.anchor(f0, q0), q);
+  EXPECT_NEAR(st.df_dq, 8 * steep.at(q).dhi, 1e-12 * st.df_dq);
+}
+
 TEST(KesShipped, SyntheticCurvesReproduceDenimB) {
   const Fabric kes = load_fabric("denim-B");
   const Fabric crv = load_fabric("denim-B-synthetic");

@@ -76,6 +76,29 @@ TEST(FreeFall, FollowsGravity) {
   }
 }
 
+// Air drag -beta m v, implicit in each step: v' = (v + g dt) / (1 + beta dt),
+// so the cloth settles to the terminal speed g / beta.
+TEST(FreeFall, DragGivesTheTerminalSpeed) {
+  Scene s = flat_scene(9, 8, 0.2, 0.15);
+  s.solver.dt = 2e-3;
+  s.solver.dt_max = 2e-3;
+  s.solver.tolerance = 1e-12;
+  s.solver.max_iterations = 1000;
+  s.solver.drag = 25.0;
+  s.obstacle.floor = false;
+  World w(s, test_fabric());
+  Timers tm;
+  double v = w.loop->step(tm).max_speed;  // the first step starts from a half-step velocity
+  for (int k = 1; k < 200; ++k) {         // 0.4 s: ten time constants
+    const StepStats st = w.loop->step(tm);
+    ASSERT_TRUE(st.converged) << "step " << st.step;
+    const double want = (v + 9.80665 * 2e-3) / (1 + 25.0 * 2e-3);
+    EXPECT_NEAR(st.max_speed, want, 1e-6 * want) << "step " << st.step;
+    v = st.max_speed;
+  }
+  EXPECT_NEAR(v, 9.80665 / 25.0, 1e-3 * v);
+}
+
 TEST(Mass, TotalEqualsArealDensityTimesArea) {
   for (auto n : {std::array<int, 2>{3, 3}, std::array<int, 2>{17, 9}, std::array<int, 2>{64, 33}}) {
     Scene s = flat_scene(n[0], n[1], 0.7, 0.4);

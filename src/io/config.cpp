@@ -48,6 +48,8 @@ const KeySpec kKeys[] = {
     {"cloth", "tile", Kind::Int},
     {"cloth", "shear", Kind::Bool},
     {"cloth", "clamp", Kind::Int},
+    {"cloth", "reversal", Kind::Float},
+    {"cloth", "stretch_reversal", Kind::Float},
     {"cloth", "height", Kind::Float},
     {"cloth", "center", Kind::Float2},
     {"obstacle", "shape", Kind::String},
@@ -67,6 +69,7 @@ const KeySpec kKeys[] = {
     {"solver", "rest_speed", Kind::Float},
     {"solver", "contact_thickness", Kind::Float},
     {"solver", "memory", Kind::Float},
+    {"solver", "drag", Kind::Float},
     {"solver", "wall_limit", Kind::Float},
     {"solver", "end_time", Kind::Float},
     {"output", "every", Kind::Int},
@@ -464,6 +467,8 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("cloth.tile", s.cloth.tile);
   r.get("cloth.shear", s.cloth.shear);
   r.get("cloth.clamp", s.cloth.clamp);
+  r.get("cloth.reversal", s.cloth.reversal);
+  r.get("cloth.stretch_reversal", s.cloth.stretch_reversal);
   r.get("cloth.height", s.cloth.height);
   r.get("cloth.center", s.cloth.center);
   r.get_enum("obstacle.shape", s.obstacle.shape,
@@ -484,6 +489,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("solver.rest_speed", s.solver.rest_speed);
   r.get("solver.contact_thickness", s.solver.contact_thickness);
   r.get("solver.memory", s.solver.memory);
+  r.get("solver.drag", s.solver.drag);
   r.get("solver.wall_limit", s.solver.wall_limit);
   r.get("solver.end_time", s.solver.end_time);
   r.get("output.every", s.output.every);
@@ -537,6 +543,11 @@ void validate(const Config& cfg, const Scene& s) {
   check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));
   check(c.clamp >= 0 && c.clamp < c.particles[0], "cloth.clamp",
         "must be in [0, NI), got " + std::to_string(c.clamp));
+  check(c.reversal == 0 || c.reversal > 1, "cloth.reversal",
+        "must be 0 (the band taken literally) or > 1 (at 1 the force never meets a band edge)" +
+            got(c.reversal));
+  check(c.stretch_reversal == 0 || c.stretch_reversal >= 1, "cloth.stretch_reversal",
+        "must be 0 (the band taken literally) or >= 1" + got(c.stretch_reversal));
   check(!s.obstacle.floor || c.height >= 0, "cloth.height",
         "must be >= 0 (the cloth starts above the floor; obstacle.floor = true)" + got(c.height));
 
@@ -562,6 +573,7 @@ void validate(const Config& cfg, const Scene& s) {
   check(v.damping >= 0 && v.damping < 1, "solver.damping", "must be in [0, 1)" + got(v.damping));
   check(v.rest_speed >= 0, "solver.rest_speed", "must be >= 0" + got(v.rest_speed));
   check(v.memory >= 0, "solver.memory", "must be >= 0" + got(v.memory));
+  check(v.drag >= 0, "solver.drag", "must be >= 0" + got(v.drag));
   check(v.wall_limit >= 0, "solver.wall_limit", "must be >= 0 (0: no limit)" + got(v.wall_limit));
   check(v.end_time >= 0, "solver.end_time", "must be >= 0 (0: no limit)" + got(v.end_time));
   check(v.contact_thickness >= 0, "solver.contact_thickness",
@@ -651,6 +663,10 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "tile", std::to_string(c.tile), "particles per tile side");
   line(os, "shear", b(c.shear), "KES shear band");
   line(os, "clamp", std::to_string(c.clamp), "rows i < clamp held fixed (a platform); 0: none");
+  line(os, "reversal", format_double(c.reversal),
+       "bending and shear: slope inside the band / loading slope (0 literal band, > 1 KES reversal)");
+  line(os, "stretch_reversal", format_double(c.stretch_reversal),
+       "stretch: the same (1: along the loading curve's slope)");
   line(os, "height", format_double(c.height), "m, z of the flat cloth at t = 0");
   line(os, "center", format_array(c.center), "m, x-y of the cloth centre");
   const auto& o = s.obstacle;
@@ -674,6 +690,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "rest_speed", format_double(v.rest_speed), "m/s; > 0 stops once at rest");
   line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");
   line(os, "memory", format_double(v.memory), "weight of the force memory (hysteresis) term");
+  line(os, "drag", format_double(v.drag), "1/s: air drag, a force -drag*m*v on each particle");
   line(os, "wall_limit", format_double(v.wall_limit), "s; stop stepping after this long (0: no limit)");
   line(os, "end_time", format_double(v.end_time), "s of simulated time; stop once reached (0: no limit)");
   os << "\n[output]\n";

@@ -31,18 +31,34 @@ class Band {
 
   BandValue at(double q) const;
 
-  // The hysteresis (stop-operator) force for strain q given the force f1 the
-  // element had at the start of the step: f1 while it stays inside the band,
-  // else the band edge it was pushed past. Memory means: this, not f1.
+  // Inside the band the force moves with the strain at `reversal` times the
+  // loading curve's slope: 0 keeps it where it was (the band taken
+  // literally: the element then bends or stretches freely across the band);
+  // > 1 gives the steep reversal of a measured KES loop, which crosses the
+  // band over a small strain and so keeps a stiffness everywhere.
+  void set_reversal(double r) { reversal_ = r; }
+  double reversal() const { return reversal_; }
+
+  // The step's anchor: the force f1 and strain q1 at the start of the step
+  // folded into one number, so that f1 + reversal*(hi(q) - hi(q1)) = anchor
+  // + reversal*hi(q). With reversal 0 the anchor is f1 itself.
+  double anchor(double f1, double q1) const { return reversal_ > 0 ? f1 - reversal_ * at(q1).hi : f1; }
+
+  // The hysteresis (stop-operator) force for strain q given the step's
+  // anchor: the force moved inside the band as above, clamped to the band
+  // edge it was pushed past. Memory means: this, not the step-start force.
   struct Stop {
     double f;     // target force
-    double df_dq; // its slope (0 inside the band)
+    double df_dq; // its slope (reversal * the loading slope inside the band)
   };
-  Stop stop(double f1, double q) const { return stop(f1, at(q)); }
-  static Stop stop(double f1, const BandValue& v) {
-    if (f1 > v.hi) return {v.hi, v.dhi};
-    if (f1 < v.lo) return {v.lo, v.dlo};
-    return {f1, 0.0};
+  Stop stop(double anchor, double q) const { return stop(anchor, at(q)); }
+  Stop stop(double anchor, const BandValue& v) const {
+    const double f = anchor + reversal_ * v.hi;
+    if (f > v.hi) return {v.hi, v.dhi};
+    if (f < v.lo) return {v.lo, v.dlo};
+    // On an edge by rounding (a band of zero width always): the edge's slope.
+    if (reversal_ > 0 && (f == v.hi || f == v.lo)) return {f, f == v.hi ? v.dhi : v.dlo};
+    return {f, reversal_ * v.dhi};
   }
   BandExcess excess(double f, double q) const { return excess(f, at(q)); }
   static BandExcess excess(double f, const BandValue& v) {
@@ -56,6 +72,7 @@ class Band {
   double fm_ = 0, emt_ = 1, n_load_ = 1, n_unload_ = 1;  // PowerLaw
   double slope_ = 0, half_ = 0;                          // Linear
   Curve load_, unload_;                                  // Table
+  double reversal_ = 0;
 };
 
 // Piecewise-linear interpolation with linear extrapolation from the end segments.

@@ -47,7 +47,7 @@ struct Cloth {
   Layout layout;
   std::vector<double> z;         // unknowns (see Layout)
   std::vector<double> x1, x2;    // positions at the start of this step and the one before
-  std::vector<double> f1;        // element forces at the start of this step (z from tension() on)
+  std::vector<double> anchor;    // per element force slot: Band::anchor of the step's start (z from tension() on)
   std::vector<double> mass;      // kg per particle: density * area it represents
   std::vector<uint8_t> flags;    // ParticleFlag per particle
   std::vector<uint8_t> level;    // AMRC level of the particle's finest leaf (0: finest)

@@ -56,7 +56,7 @@ void Evaluator::edge_forces(int64_t s, const double* z) {
   put(&buf_e_[6 * s + 3], g[1], f * w);
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
-  const Band::Stop st = Band::stop(c_.f1[s], bv);
+  const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_e_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -75,7 +75,7 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
   for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], g[k], f * w);
   const BandValue bv = m_.bend[d].at(th / Lm);
   const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
-  const Band::Stop st = Band::stop(c_.f1[c_.layout.moment() - c_.layout.tension() + s], bv);
+  const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_t_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -91,7 +91,7 @@ void Evaluator::shear_forces(int64_t s, const double* z) {
   for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], g[k], f * A);
   const BandValue bv = m_.shear.at(phi);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
-  const Band::Stop st = Band::stop(c_.f1[c_.layout.shear() - c_.layout.tension() + s], bv);
+  const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -112,11 +112,13 @@ void Evaluator::particle_residual(int64_t p, const double* z) {
   const double* x1 = &c_.x1[3 * p];
   const double* x2 = &c_.x2[3 * p];
   const double ca = m_.accel_coeff(), ratio = m_.dt / m_.dt_prev, mass = c_.mass[p];
+  const double cd = m_.drag / m_.dt;
   double fc[3];
   contact_force(m_.contact, x, fc);
   double r[3];
   for (int k = 0; k < 3; ++k)
-    r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) - m_.gravity[k]) - fc[k];
+    r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
+           fc[k];
   gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) {
     r[0] += v[0];
     r[1] += v[1];
@@ -213,7 +215,7 @@ void Evaluator::particle_gradient(int64_t p, const double* z, double* grad) {
   if (m_.use_newton) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
-    const double mca = c_.mass[p] * m_.accel_coeff();
+    const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
   gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) {
@@ -331,7 +333,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   // exact Gauss-Newton diagonal); inside, the force is free at no cost.
   const double mu = m_.memory;
   auto band_slope = [mu, this](int64_t slot, const Band& b, double f, double q) {
-    const double stop = b.stop(c_.f1[slot], q).df_dq;
+    const double stop = b.stop(c_.anchor[slot], q).df_dq;
     const double r = b.excess(f, q).dr_dq;
     return std::sqrt(r * r + mu * stop * stop);
   };
@@ -387,7 +389,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     diag[c_.layout.shear() + s] =
         (A * A * nf + lam * lam * (outside(m_.shear, f, phi) + m_.memory)) * inv2;
   });
-  const double ca = m_.accel_coeff();
+  const double ca = m_.inertia_coeff();
   for_each_item(lists_.particles, pol_, [&](int64_t p) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);

@@ -19,11 +19,14 @@ struct Model {
   double dt = 1e-3, dt_prev = 1e-3;  // this step and the previous one, s
   double force_scale = 1;            // F0: residual forces are measured in F0 (a particle's weight)
   double memory = 1.0;               // weight of the force memory term
+  double drag = 0.0;                 // 1/s: air drag, a force -drag*m*v on each particle
   // Term switches (tests check each term's gradient alone).
   bool use_newton = true, use_stretch = true, use_bend = true, use_shear = true;
 
   // d(acceleration)/dx for the three-point formula with unequal steps.
   double accel_coeff() const { return 2.0 / ((dt + dt_prev) * dt); }
+  // d(residual)/dx per unit mass: inertia and drag (v = (x - x1)/dt).
+  double inertia_coeff() const { return accel_coeff() + drag / dt; }
 };
 
 struct Cloth;

@@ -20,6 +20,11 @@ struct ClothSpec {
   double height = 0.45;                      // m, z of the flat cloth at t = 0
   std::array<double, 2> center{0.0, 0.0};    // m, x-y of the cloth centre
   int clamp = 0;                             // rows i < clamp held fixed (a platform)
+  // Slope of the force inside a KES band, as a multiple of the loading
+  // curve's (Band::set_reversal): bending and shear, and stretch. 0 is the
+  // band taken literally; > 1 dissipates as a KES loop does.
+  double reversal = 0;
+  double stretch_reversal = 0;
 };
 
 struct ObstacleSpec {
@@ -42,6 +47,7 @@ struct SolverSpec {
   // CG on the total cost. Both stop when the same cost is below tolerance.
   SolverMethod method = SolverMethod::Newton;
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
+  double drag = 0.0;            // 1/s: air drag -drag*m*v in each particle's Newton equation
   double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)
   double contact_thickness = 0.0;  // m; 0 = automatic (half a grid spacing)
   // Weight of the memory term 1/2 mu |(f - f_history) lambda / F0|^2: inside a

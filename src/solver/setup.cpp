@@ -24,6 +24,8 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   const ShearKES& s = fabric.shear;
   m.shear = Band::linear(s.g, s.hg, s.load, s.unload);
   m.use_shear = scene.cloth.shear;
+  for (Band* b : {&m.bend[0], &m.bend[1], &m.shear}) b->set_reversal(scene.cloth.reversal);
+  for (Band* b : {&m.stretch[0], &m.stretch[1]}) b->set_reversal(scene.cloth.stretch_reversal);
   // Residual forces are measured in the weight of one finest-mesh particle.
   const double g = std::fabs(m.gravity[2]);
   const double weight = fabric.density * hi * hj * g;
@@ -48,6 +50,7 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   m.contact.stiffness = 1e4 * weight / delta;
   m.dt = m.dt_prev = scene.solver.dt;
   m.memory = scene.solver.memory;
+  m.drag = scene.solver.drag;
   return m;
 }
 
@@ -64,7 +67,7 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   c.x1.assign(3 * n, 0.0);
   c.x2.assign(3 * n, 0.0);
   c.mass.assign(n, 0.0);
-  c.f1.assign(5 * n, 0.0);
+  c.anchor.assign(5 * n, 0.0);
   c.flags.assign(n, kActive);
   c.level.assign(n, 0);
   c.edge_on.assign(2 * n, 0);

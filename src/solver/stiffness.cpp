@@ -26,13 +26,13 @@ void Evaluator::hysteresis_forces(double* z) {
   halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
   interpolate_hanging(z);
   const Layout& L = c_.layout;
-  const int64_t fo = L.tension();  // f1 is indexed from the tension block
+  const int64_t fo = L.tension();  // anchors are indexed from the tension block
   for_edges([&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[2];
     const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
-    z[L.tension() + s] = m_.stretch[d].stop(c_.f1[s], len / c_.edge_rest[s] - 1).f;
+    z[L.tension() + s] = m_.stretch[d].stop(c_.anchor[s], len / c_.edge_rest[s] - 1).f;
   });
   for_triples([&](int64_t s) {
     const int64_t p = s >> 1;
@@ -40,12 +40,42 @@ void Evaluator::hysteresis_forces(double* z) {
     V g[3];
     const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]),
                                  load3<double>(&c_.bend_axis[3 * s]), g);
-    z[L.moment() + s] = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th / c_.triple_rest[s]).f;
+    z[L.moment() + s] = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / c_.triple_rest[s]).f;
   });
   for_shears([&](int64_t s) {
     V g[3];
     const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
-    z[L.shear() + s] = m_.shear.stop(c_.f1[L.shear() - fo + s], phi).f;
+    z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).f;
+  });
+}
+
+void Evaluator::hysteresis_anchors(const double* x1, double* a) {
+  if (m_.stretch[0].reversal() == 0 && m_.stretch[1].reversal() == 0 && m_.bend[0].reversal() == 0 &&
+      m_.bend[1].reversal() == 0 && m_.shear.reversal() == 0)
+    return;
+  const Layout& L = c_.layout;
+  const int64_t fo = L.tension();
+  for_edges([&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V g[2];
+    const double len = edge_length(at(x1, p), at(x1, c_.next[d][p]), g);
+    a[s] = m_.stretch[d].anchor(a[s], len / c_.edge_rest[s] - 1);
+  });
+  for_triples([&](int64_t s) {
+    const int64_t p = s >> 1;
+    const int d = int(s & 1);
+    V g[3];
+    const double th = bend_angle(at(x1, c_.prev[d][p]), at(x1, p), at(x1, c_.next[d][p]),
+                                 load3<double>(&c_.bend_axis[3 * s]), g);
+    double& f = a[L.moment() - fo + s];
+    f = m_.bend[d].anchor(f, th / c_.triple_rest[s]);
+  });
+  for_shears([&](int64_t s) {
+    V g[3];
+    const double phi = shear_angle(at(x1, s), at(x1, c_.next[0][s]), at(x1, c_.next[1][s]), g);
+    double& f = a[L.shear() - fo + s];
+    f = m_.shear.anchor(f, phi);
   });
 }
 
@@ -60,7 +90,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     V3<Dual> g[2];
     const Dual len = edge_length(at(z, v, p), at(z, v, c_.next[d][p]), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
-    const Band::Stop st = m_.stretch[d].stop(c_.f1[s], len.v / L0 - 1);
+    const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len.v / L0 - 1);
     const double tension = std::max(0.0, st.f), stiff = st.df_dq / L0 * len.d;
     for (int k = 0; k < 2; ++k)
       put(&buf_e_[6 * s + 3 * k], w * (tension * deriv_of(g[k]) + stiff * value_of(g[k])));
@@ -72,20 +102,20 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const Dual th = bend_angle(at(z, v, c_.prev[d][p]), at(z, v, p), at(z, v, c_.next[d][p]),
                                load3<Dual>(&c_.bend_axis[3 * s]), g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
-    const double slope = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th.v / Lm).df_dq;
+    const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th.v / Lm).df_dq;
     const double stiff = w * slope / Lm * th.d;
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * value_of(g[k]));
   });
   for_shears([&](int64_t s) {
     V3<Dual> g[3];
     const Dual phi = shear_angle(at(z, v, s), at(z, v, c_.next[0][s]), at(z, v, c_.next[1][s]), g);
-    const double slope = m_.shear.stop(c_.f1[L.shear() - fo + s], phi.v).df_dq;
+    const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi.v).df_dq;
     const double stiff = c_.shear_area[s] * slope * phi.d;
     for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], stiff * value_of(g[k]));
   });
   const int64_t nz = L.size();
   parallel_for(nz, [&](int64_t k) { kv[k] = 0.0; });
-  const double ca = m_.accel_coeff();
+  const double ca = m_.inertia_coeff();
   for_each_item(lists_.particles, pol_, [&](int64_t p) {
     double fc[3], slope = 0;
     const bool touching = contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
@@ -134,7 +164,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     V g[2];
     const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
-    const Band::Stop st = m_.stretch[d].stop(c_.f1[s], len / L0 - 1);
+    const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len / L0 - 1);
     for (int k = 0; k < 2; ++k)
       buf_e_[6 * s + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
   });
@@ -145,16 +175,16 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]),
                                  load3<double>(&c_.bend_axis[3 * s]), g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
-    const double slope = m_.bend[d].stop(c_.f1[L.moment() - fo + s], th / Lm).df_dq;
+    const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / Lm).df_dq;
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   });
   for_shears([&](int64_t s) {
     V g[3];
     const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
-    const double slope = m_.shear.stop(c_.f1[L.shear() - fo + s], phi).df_dq;
+    const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
     for (int k = 0; k < 3; ++k) buf_s_[9 * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
   });
-  const double ca = m_.accel_coeff();
+  const double ca = m_.inertia_coeff();
   for_each_item(lists_.particles, pol_, [&](int64_t p) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);

@@ -166,10 +166,11 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   st.step = c_.step + 1;
   const double dt_start = c_.dt, first_step = cg_.first_step();
   std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
-  std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.f1.begin());
+  std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.anchor.begin());
   halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
   ev_.interpolate_hanging(c_.x1.data());           // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();
+  ev_.hysteresis_anchors(c_.x1.data(), c_.anchor.data());
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;
   cs.tolerance = spec_.tolerance;
