@@ -30,7 +30,7 @@ inline Cantilever run_cantilever(int intervals, double dt, int max_steps, double
   // reversal; 0 keeps Newton's path (its stiffness where the force sits
   // exactly on the line) as this test was calibrated with: at 5 the strip
   // creeps on and misses the rest threshold.
-  s.cloth.reversal = 0;
+  s.cloth.bend_reversal = 0;
   s.cloth.height = 0.5;
   s.solver.dt = dt;
   s.solver.dt_max = dt;

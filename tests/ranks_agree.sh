@@ -16,7 +16,7 @@ for method in newton cg amrc; do
         --set solver.steps=40 --set output.every=10 --quiet)
   if [[ $method == amrc ]]; then args+=("${amrc[@]}"); else args+=(--set solver.method=$method); fi
   if [[ $method == newton ]]; then
-    args+=(--set cloth.reversal=5 --set cloth.stretch_reversal=2 --set solver.drag=3 --set cloth.height=0.43)
+    args+=(--set cloth.bend_reversal=5 --set cloth.shear_reversal=3 --set cloth.stretch_reversal=2 --set solver.drag=3 --set cloth.height=0.43)
   fi
   OMP_NUM_THREADS=1 "$drape" "${args[@]}" --output "$work/$method-1"
   for n in 2 4; do

@@ -37,7 +37,8 @@ Quadtree amrc_tree() {
 World random_world(unsigned seed, bool amrc = false) {
   Scene s = amrc ? flat_scene(13, 11, 0.12, 0.10) : flat_scene(7, 6, 0.06, 0.05);
   s.cloth.height = 0.004;
-  s.cloth.reversal = 5;  // the targets then move inside the bands
+  s.cloth.bend_reversal = 5;  // the targets then move inside the bands
+  s.cloth.shear_reversal = 3;
   s.cloth.stretch_reversal = 2;
   s.obstacle.shape = ObstacleShape::Sphere;
   s.obstacle.center = {0.0, 0.0, -0.02};
@@ -67,6 +68,7 @@ World random_world(unsigned seed, bool amrc = false) {
   // into the anchors.
   EXPECT_GT(w.model.bend[0].reversal(), 1.0);
   EXPECT_GT(w.model.stretch[1].reversal(), 1.0);
+  EXPECT_GT(w.model.shear.reversal(), 1.0);
   w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), w.cloth.anchor.data());
   return w;
 }

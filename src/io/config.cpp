@@ -48,7 +48,8 @@ const KeySpec kKeys[] = {
     {"cloth", "tile", Kind::Int},
     {"cloth", "shear", Kind::Bool},
     {"cloth", "clamp", Kind::Int},
-    {"cloth", "reversal", Kind::Float},
+    {"cloth", "bend_reversal", Kind::Float},
+    {"cloth", "shear_reversal", Kind::Float},
     {"cloth", "stretch_reversal", Kind::Float},
     {"cloth", "height", Kind::Float},
     {"cloth", "center", Kind::Float2},
@@ -467,7 +468,8 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("cloth.tile", s.cloth.tile);
   r.get("cloth.shear", s.cloth.shear);
   r.get("cloth.clamp", s.cloth.clamp);
-  r.get("cloth.reversal", s.cloth.reversal);
+  r.get("cloth.bend_reversal", s.cloth.bend_reversal);
+  r.get("cloth.shear_reversal", s.cloth.shear_reversal);
   r.get("cloth.stretch_reversal", s.cloth.stretch_reversal);
   r.get("cloth.height", s.cloth.height);
   r.get("cloth.center", s.cloth.center);
@@ -543,9 +545,10 @@ void validate(const Config& cfg, const Scene& s) {
   check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));
   check(c.clamp >= 0 && c.clamp < c.particles[0], "cloth.clamp",
         "must be in [0, NI), got " + std::to_string(c.clamp));
-  check(c.reversal == 0 || c.reversal > 1, "cloth.reversal",
-        "must be 0 (the band taken literally) or > 1 (at 1 the force never meets a band edge)" +
-            got(c.reversal));
+  // At 1 a linear band's force never meets an edge again: no hysteresis.
+  for (const auto& [key, r] : {std::pair{"cloth.bend_reversal", c.bend_reversal},
+                               std::pair{"cloth.shear_reversal", c.shear_reversal}})
+    check(r == 0 || r > 1, key, "must be 0 (the band taken literally) or > 1" + got(r));
   check(c.stretch_reversal == 0 || c.stretch_reversal >= 1, "cloth.stretch_reversal",
         "must be 0 (the band taken literally) or >= 1" + got(c.stretch_reversal));
   check(!s.obstacle.floor || c.height >= 0, "cloth.height",
@@ -663,8 +666,9 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "tile", std::to_string(c.tile), "particles per tile side");
   line(os, "shear", b(c.shear), "KES shear band");
   line(os, "clamp", std::to_string(c.clamp), "rows i < clamp held fixed (a platform); 0: none");
-  line(os, "reversal", format_double(c.reversal),
-       "bending and shear: slope inside the band / loading slope (0 literal band, > 1 KES reversal)");
+  line(os, "bend_reversal", format_double(c.bend_reversal),
+       "slope inside the bending band / loading slope (0 literal band, > 1 KES reversal)");
+  line(os, "shear_reversal", format_double(c.shear_reversal), "the same for shear");
   line(os, "stretch_reversal", format_double(c.stretch_reversal),
        "stretch: the same (1: along the loading curve's slope)");
   line(os, "height", format_double(c.height), "m, z of the flat cloth at t = 0");

@@ -21,9 +21,10 @@ struct ClothSpec {
   std::array<double, 2> center{0.0, 0.0};    // m, x-y of the cloth centre
   int clamp = 0;                             // rows i < clamp held fixed (a platform)
   // Slope of the force inside a KES band, as a multiple of the loading
-  // curve's (Band::set_reversal): bending and shear, and stretch. 0 is the
-  // band taken literally; > 1 dissipates as a KES loop does.
-  double reversal = 0;
+  // curve's (Band::set_reversal), per kind of band. 0 is the band taken
+  // literally; > 1 dissipates as a KES loop does.
+  double bend_reversal = 0;
+  double shear_reversal = 0;
   double stretch_reversal = 0;
 };
 

@@ -24,8 +24,11 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   const ShearKES& s = fabric.shear;
   m.shear = Band::linear(s.g, s.hg, s.load, s.unload);
   m.use_shear = scene.cloth.shear;
-  for (Band* b : {&m.bend[0], &m.bend[1], &m.shear}) b->set_reversal(scene.cloth.reversal);
-  for (Band* b : {&m.stretch[0], &m.stretch[1]}) b->set_reversal(scene.cloth.stretch_reversal);
+  for (int d = 0; d < 2; ++d) {
+    m.bend[d].set_reversal(scene.cloth.bend_reversal);
+    m.stretch[d].set_reversal(scene.cloth.stretch_reversal);
+  }
+  m.shear.set_reversal(scene.cloth.shear_reversal);
   // Residual forces are measured in the weight of one finest-mesh particle.
   const double g = std::fabs(m.gravity[2]);
   const double weight = fabric.density * hi * hj * g;
