@@ -396,6 +396,7 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
       {"key_amrc_every", {"--set", "amrc.every=0"}, {"amrc.every", ">= 1"}},
       {"key_imbalance", {"--set", "parallel.imbalance=0.9"}, {"parallel.imbalance", ">= 1"}},
       {"key_reversal", {"--set", "cloth.shear_reversal=0.5"}, {"cloth.shear_reversal", "> 1"}},
+      {"key_compression", {"--set", "cloth.compression=-0.1"}, {"cloth.compression", "[0, 1]"}},
       {"key_amrc_numeric", {"--set", "cloth.particles=[9,9]", "--set", "amrc.enabled=true", "--set",
                             "solver.gradient=numeric"},
        {"amrc.enabled", "analytic"}},

@@ -40,6 +40,7 @@ World random_world(unsigned seed, bool amrc = false) {
   s.cloth.bend_reversal = 5;  // the targets then move inside the bands
   s.cloth.shear_reversal = 3;
   s.cloth.stretch_reversal = 2;
+  s.cloth.compression = 0.1;  // the jitter shortens some edges: their branch counts
   s.obstacle.shape = ObstacleShape::Sphere;
   s.obstacle.center = {0.0, 0.0, -0.02};
   s.obstacle.radius = 0.025;

@@ -252,6 +252,44 @@ std::vector<double> ramp(double from, double to, int n, std::vector<double> qs =
   return qs;
 }
 
+// In compression the band is one line of the chosen fraction of Fm/EMT, for
+// the KES fit and for measured curves alike; tension is untouched by it.
+TEST(BandCompression, ALineOfTheChosenModulusAndTensionUnchanged) {
+  TensileKES kes;
+  kes.lt = 0.62;
+  kes.emt = 0.07;
+  kes.rt = 0.65;
+  TensileKES curve = kes;
+  curve.load = {{0.0, 0.035, 0.07}, {0.0, 100.0, kes.fm}};
+  curve.unload = {{0.0, 0.035, 0.07}, {0.0, 40.0, kes.fm}};
+  for (const TensileKES& k : {kes, curve}) {
+    const Band none = Band::tensile(k), some = Band::tensile(k, 0.1);
+    const double kc = 0.1 * k.fm / k.emt, eps = Band::kCompressionOnset * k.emt;
+    for (double q : {-0.02, -0.01, -1.01 * eps}) {
+      const BandValue v = some.at(q);
+      EXPECT_DOUBLE_EQ(v.lo, kc * (q + eps / 2));  // the line, past the onset
+      EXPECT_DOUBLE_EQ(v.hi, v.lo);
+      EXPECT_DOUBLE_EQ(v.dlo, kc);
+      EXPECT_DOUBLE_EQ(v.dhi, kc);
+      EXPECT_EQ(none.at(q).hi, 0.0);
+      // A zero-width band: the hysteresis target is the line, reversal or not.
+      EXPECT_DOUBLE_EQ(some.stop(some.anchor(0.0, 0.0), q).f, v.lo);
+    }
+    // The onset: force and slope continuous at -eps and at rest length.
+    for (double q : {-eps, -1e-9}) {
+      const BandValue a = some.at(q * (1 + 1e-9)), b = some.at(q * (1 - 1e-9));
+      EXPECT_NEAR(a.hi, b.hi, 1e-6 * kc * eps);
+      EXPECT_NEAR(a.dhi, b.dhi, 1e-6 * kc);
+      EXPECT_LE(some.at(q).hi, 0.0);
+    }
+    EXPECT_NEAR(some.at(-1e-12).dhi, 0.0, 1e-6 * kc);
+    for (double q : {1e-4, 0.03, 0.1}) {
+      EXPECT_EQ(some.at(q).lo, none.at(q).lo);
+      EXPECT_EQ(some.at(q).hi, none.at(q).hi);
+    }
+  }
+}
+
 TEST(BandReversal, SteepReversalCrossesTheBandOverTheStrainItsSlopeGives) {
   const double B = 2e-5, HB = 7e-4, K = 200, r = 5;  // denim-like bending, SI
   Band band = Band::linear(B, HB);

@@ -51,6 +51,7 @@ const KeySpec kKeys[] = {
     {"cloth", "bend_reversal", Kind::Float},
     {"cloth", "shear_reversal", Kind::Float},
     {"cloth", "stretch_reversal", Kind::Float},
+    {"cloth", "compression", Kind::Float},
     {"cloth", "height", Kind::Float},
     {"cloth", "center", Kind::Float2},
     {"obstacle", "shape", Kind::String},
@@ -471,6 +472,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("cloth.bend_reversal", s.cloth.bend_reversal);
   r.get("cloth.shear_reversal", s.cloth.shear_reversal);
   r.get("cloth.stretch_reversal", s.cloth.stretch_reversal);
+  r.get("cloth.compression", s.cloth.compression);
   r.get("cloth.height", s.cloth.height);
   r.get("cloth.center", s.cloth.center);
   r.get_enum("obstacle.shape", s.obstacle.shape,
@@ -551,6 +553,8 @@ void validate(const Config& cfg, const Scene& s) {
     check(r == 0 || r > 1, key, "must be 0 (the band taken literally) or > 1" + got(r));
   check(c.stretch_reversal == 0 || c.stretch_reversal >= 1, "cloth.stretch_reversal",
         "must be 0 (the band taken literally) or >= 1" + got(c.stretch_reversal));
+  check(c.compression >= 0 && c.compression <= 1, "cloth.compression",
+        "must be in [0, 1]" + got(c.compression));
   check(!s.obstacle.floor || c.height >= 0, "cloth.height",
         "must be >= 0 (the cloth starts above the floor; obstacle.floor = true)" + got(c.height));
 
@@ -671,6 +675,8 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "shear_reversal", format_double(c.shear_reversal), "the same for shear");
   line(os, "stretch_reversal", format_double(c.stretch_reversal),
        "stretch: the same (1: along the loading curve's slope)");
+  line(os, "compression", format_double(c.compression),
+       "compressive modulus / the tensile test's Fm/EMT (0: no resistance)");
   line(os, "height", format_double(c.height), "m, z of the flat cloth at t = 0");
   line(os, "center", format_array(c.center), "m, x-y of the cloth centre");
   const auto& o = s.obstacle;

@@ -5,8 +5,11 @@
 
 namespace drape {
 
-Band Band::tensile(const TensileKES& k) {
+Band Band::tensile(const TensileKES& k, double compression) {
   Band b;
+  b.tensile_ = true;
+  b.kc_ = compression * k.fm / k.emt;
+  b.emt_ = k.emt;
   if (!k.load.empty()) {
     b.kind_ = Kind::Table;
     b.load_ = k.load;
@@ -51,6 +54,14 @@ double interpolate(const Curve& c, double q, double* slope) {
 }
 
 BandValue Band::at(double q) const {
+  if (tensile_ && q <= 0) {
+    // Quadratic onset over [-eps, 0], then the line: no kink at rest length,
+    // where unloaded edges sit (the tension branch starts with slope 0 too).
+    const double eps = kCompressionOnset * emt_;
+    const double f = q < -eps ? kc_ * (q + 0.5 * eps) : -0.5 * kc_ * q * q / eps;
+    const double s = q < -eps ? kc_ : -kc_ * q / eps;
+    return {f, f, s, s};
+  }
   switch (kind_) {
     case Kind::Linear:
       return {slope_ * q - half_, slope_ * q + half_, slope_, slope_};
@@ -64,7 +75,6 @@ BandValue Band::at(double q) const {
       return {fl, fu, sl, su};
     }
     case Kind::PowerLaw: {
-      if (q <= 0) return {0, 0, 0, 0};
       if (q >= emt_) {
         const double s = n_load_ * fm_ / emt_;
         const double f = fm_ + s * (q - emt_);

@@ -20,11 +20,14 @@ struct BandExcess {
 
 class Band {
  public:
+  static constexpr double kCompressionOnset = 0.02;
   Band() = default;
   // Stretch: q = strain. Loading curve Fm*(q/EMT)^n with n = 2/LT - 1, so its
-  // area to EMT is WT; unloading Fm*(q/EMT)^m with area RT*WT. No tension in
-  // compression; past EMT both follow the loading tangent.
-  static Band tensile(const TensileKES& k);
+  // area to EMT is WT; unloading Fm*(q/EMT)^m with area RT*WT (or measured
+  // curves); past EMT both follow the loading tangent. In compression, which
+  // KES does not measure, the band is a line of slope `compression`*(Fm/EMT),
+  // reached over the first kCompressionOnset*EMT of shortening.
+  static Band tensile(const TensileKES& k, double compression = 0);
   // Bending and shear: f = slope*q +- half_width, or measured curves.
   static Band linear(double slope, double half_width, const Curve& load = {},
                      const Curve& unload = {});
@@ -70,6 +73,8 @@ class Band {
  private:
   enum class Kind { PowerLaw, Linear, Table } kind_ = Kind::Linear;
   double fm_ = 0, emt_ = 1, n_load_ = 1, n_unload_ = 1;  // PowerLaw
+  bool tensile_ = false;
+  double kc_ = 0;  // tensile: the compression branch's slope
   double slope_ = 0, half_ = 0;                          // Linear
   Curve load_, unload_;                                  // Table
   double reversal_ = 0;

@@ -45,20 +45,26 @@ inline T edge_length(const V3<T>& a, const V3<T>& b, V3<T> g[2]) {
   return L;
 }
 
-// Triple a-b-c: signed turning angle at b about the frozen axis n (unit):
-// theta = atan2((e1 x e2).n, e1.e2). Only bending out of the cloth's plane
+// Triple a-b-c: signed turning angle at b about the frozen axis n (unit),
+// between the edges projected on the plane normal to n:
+// theta = atan2((e1 x e2).n, e1p.e2p). Only bending out of the cloth's plane
 // (about n) counts; the axis is set from the step's history (DESIGN §1).
+// Projected, atan2's arguments vanish only when an edge lies along n (an
+// in-plane right-angle turn); with the plain e1.e2 they vanished at any
+// right-angle turn about an axis normal to n, which grid-scale crumples at
+// a hanging corner reach (a 49 x 49 drape stalled there; projected it passes).
 // bend_terms gives the gradient and the atan2 arguments; bend_gradient is for
 // passes that need no angle (atan2 is a large share of the work).
 template <class T>
 inline void bend_terms(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3],
                        T& s, T& co) {
   const V3<T> e1 = b - a, e2 = c - b;
+  const V3<T> e1p = e1 - dot(e1, n) * n, e2p = e2 - dot(e2, n) * n;
   s = dot(cross(e1, e2), n);
-  co = dot(e1, e2);
+  co = dot(e1p, e2p);
   const T inv = T(1) / (s * s + co * co);
-  const V3<T> ge1 = inv * (co * cross(e2, n) - s * e2);
-  const V3<T> ge2 = inv * (co * cross(n, e1) - s * e1);
+  const V3<T> ge1 = inv * (co * cross(e2, n) - s * e2p);
+  const V3<T> ge2 = inv * (co * cross(n, e1) - s * e1p);
   g[0] = T(-1) * ge1;
   g[1] = ge1 - ge2;
   g[2] = ge2;

@@ -26,6 +26,10 @@ struct ClothSpec {
   double bend_reversal = 0;
   double shear_reversal = 0;
   double stretch_reversal = 0;
+  // In-plane compression: woven cloth buckles out of its plane rather than
+  // shorten its yarns, which KES does not measure. A linear branch of this
+  // fraction of the tensile test's mean modulus Fm/EMT (0: edges may collapse).
+  double compression = 0;
 };
 
 struct ObstacleSpec {

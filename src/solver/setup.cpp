@@ -17,7 +17,7 @@ double Cloth::total_mass() const {
 Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj) {
   Model m;
   for (int d = 0; d < 2; ++d) {
-    m.stretch[d] = Band::tensile(fabric.tensile[d]);
+    m.stretch[d] = Band::tensile(fabric.tensile[d], scene.cloth.compression);
     const BendingKES& b = fabric.bending[d];
     m.bend[d] = Band::linear(b.b, b.hb, b.load, b.unload);
   }
