@@ -232,7 +232,40 @@ TEST(ParallelOutput, BadFrameOnOneRankFailsOnBoth) {
     Frame frame(1, {{0, 5, 0, NJ}});
     FrameView view = frame.view();
     if (rank == 1) view.owned = {{5, NI + 1, 0, NJ}};
-    EXPECT_THROW(out.write_frame(view), std::runtime_error);
+    try {
+      out.write_frame(view);
+      ADD_FAILURE() << "rank " << rank << " wrote the frame";
+    } catch (const std::runtime_error& e) {  // each rank says whose frame it was
+      EXPECT_NE(std::string(e.what()).find(rank == 1 ? "outside the grid" : "another rank's frame"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank_of(MPI_COMM_WORLD) == 0) {
+    EXPECT_TRUE(fs::is_empty(dir));
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+}
+
+TEST(ParallelOutput, RanksDisagreeingOnTheArraysFailOnBoth) {
+  // Dataset creation is collective: a frame with shear on one rank only
+  // must be refused on both before any of it is written.
+  const std::string dir = shared_dir("disagree");
+  {
+    Scene scene;
+    Fabric fabric;
+    Hdf5Output out(dir, MPI_COMM_WORLD, scene, "", fabric, NI, NJ);
+    const int rank = rank_of(MPI_COMM_WORLD);
+    Frame frame(1, {{rank * 5, rank ? NI : 5, 0, NJ}});
+    FrameView view = frame.view();
+    if (rank == 1) view.shear = nullptr;
+    try {
+      out.write_frame(view);
+      ADD_FAILURE() << "rank " << rank << " wrote the frame";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("ranks disagree"), std::string::npos) << e.what();
+    }
   }
   MPI_Barrier(MPI_COMM_WORLD);
   if (rank_of(MPI_COMM_WORLD) == 0) {

@@ -1,5 +1,7 @@
 #include "decomp/collective.hpp"
 
+#include <algorithm>
+
 namespace drape {
 
 int rank_of(MPI_Comm comm) {
@@ -25,5 +27,26 @@ int max_over_ranks(MPI_Comm comm, int value) {
   MPI_Allreduce(&value, &out, 1, MPI_INT, MPI_MAX, comm);
   return out;
 }
+
+unsigned or_over_ranks(MPI_Comm comm, unsigned value) {
+  unsigned out = value;
+  MPI_Allreduce(&value, &out, 1, MPI_UNSIGNED, MPI_BOR, comm);
+  return out;
+}
+
+uint64_t sum_over_ranks(MPI_Comm comm, uint64_t value) {
+  uint64_t out = value;
+  MPI_Allreduce(&value, &out, 1, MPI_UINT64_T, MPI_SUM, comm);
+  return out;
+}
+
+std::string root_error(MPI_Comm comm, const std::string& error) {
+  char text[512] = {0};
+  std::copy_n(error.data(), std::min(error.size(), sizeof text - 1), text);
+  MPI_Bcast(text, sizeof text, MPI_CHAR, 0, comm);
+  return text;
+}
+
+void wait_for_all(MPI_Comm comm) { MPI_Barrier(comm); }
 
 }  // namespace drape

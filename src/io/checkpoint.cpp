@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "io/error.hpp"
+#include "decomp/collective.hpp"
 #include "io/h5.hpp"
 #include "solver/checksum.hpp"
 
@@ -186,11 +187,9 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
                       const std::vector<Block>& owned, const std::string& scene_toml,
                       const Fabric& fabric, const RunCounters& counters,
                       const std::vector<uint8_t>& amrc_levels) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
+  const int rank = rank_of(comm);
   const std::string path = dir + "/checkpoint.h5", tmp = path + ".tmp";
-  uint64_t local = state_sum(cloth, owned), total = 0;
-  MPI_Allreduce(&local, &total, 1, MPI_UINT64_T, MPI_SUM, comm);
+  const uint64_t total = sum_over_ranks(comm, state_sum(cloth, owned));
   const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters, amrc_levels));
 
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
@@ -233,19 +232,19 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
     file.close("closing " + tmp);  // collective: every rank's blocks are in
   }
   // Rank 0 makes it durable and publishes it; the others learn the outcome.
-  char error[512] = {0};
+  std::string error;
   if (rank == 0) {
     try {
       sync_file(tmp);
       if (std::rename(tmp.c_str(), path.c_str()) != 0)
         throw std::runtime_error("cannot rename " + tmp + " to " + path);
     } catch (const std::exception& e) {
-      std::snprintf(error, sizeof error, "%s", e.what());
+      error = e.what();
       std::remove(tmp.c_str());
     }
   }
-  MPI_Bcast(error, sizeof error, MPI_CHAR, 0, comm);
-  if (error[0]) throw std::runtime_error(std::string("checkpoint: ") + error);
+  error = root_error(comm, error);
+  if (!error.empty()) throw std::runtime_error("checkpoint: " + error);
 }
 
 // ------------------------------------------------------------- reading --

@@ -39,6 +39,7 @@
 #include <utility>
 #include <vector>
 
+#include "decomp/collective.hpp"
 #include "io/h5.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
@@ -264,8 +265,7 @@ bool Hdf5Output::Impl::reopen(const std::string& toml, int resume_step) {
                                     std::filesystem::copy_options::overwrite_existing, ec) &&
          !ec;
   }
-  MPI_Bcast(&ok, 1, MPI_INT, 0, comm);
-  if (!ok) return false;
+  if (!root_decides(comm, ok)) return false;
   open_file(false);
   const hid_t root = file.get();
   if (get_int(root, "ni") != ni || get_int(root, "nj") != nj ||
@@ -341,14 +341,14 @@ void Hdf5Output::Impl::write(const FrameView& f) {
   // frame on one rank cannot leave the others waiting. Optional arrays must
   // be given on all ranks or on none (dataset creation is collective).
   const std::string problem = frame_problem(f, ni, nj);
-  const int has = (f.tension ? 1 : 0) | (f.moment ? 2 : 0) | (f.shear ? 4 : 0) | (f.level ? 8 : 0);
-  const int local[3] = {has, ~has & 15, problem.empty() ? 0 : 1};
-  int all[3] = {0, 0, 0};
-  MPI_Allreduce(local, all, 3, MPI_INT, MPI_BOR, comm);
-  if (all[2])
+  // One or over ranks: bits 0-3 the arrays some rank has, 4-7 those some
+  // rank lacks, 8 a rank's problem.
+  const unsigned has = (f.tension ? 1u : 0u) | (f.moment ? 2u : 0u) | (f.shear ? 4u : 0u) | (f.level ? 8u : 0u);
+  const unsigned all = or_over_ranks(comm, has | (~has & 15u) << 4 | (problem.empty() ? 0u : 256u));
+  if (all & 256u)
     throw std::runtime_error("HDF5 output: " +
                              (problem.empty() ? std::string("another rank's frame is invalid") : problem));
-  if (all[0] & all[1]) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
+  if (all & (all >> 4) & 15u) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
 
   const std::string name = frame_name(f.step);
   Handle group = create_group(frames.get(), name);
@@ -386,21 +386,21 @@ void Hdf5Output::Impl::close_and_publish() {
   frames.close("closing group /frames");
   dxpl.reset();
   file.close("closing " + tmp_path);  // collective: every rank's data is in
-  MPI_Barrier(comm);
+  wait_for_all(comm);
   // Rank 0 publishes both files; the others learn whether that worked.
-  char error[512] = {0};
+  std::string error;
   if (rank == 0) {
     try {
       if (std::rename(tmp_path.c_str(), final_path.c_str()) != 0)
         throw std::runtime_error("cannot rename " + tmp_path + " to " + final_path);
       write_file_atomically(dir + "/drape.xdmf", XdmfWriter(ni, nj).document(records));
     } catch (const std::exception& e) {
-      std::snprintf(error, sizeof error, "%s", e.what());
+      error = e.what();
     }
   }
-  MPI_Bcast(error, sizeof error, MPI_CHAR, 0, comm);
+  error = root_error(comm, error);
   finished = true;
-  if (error[0]) throw std::runtime_error(std::string("HDF5 output: ") + error);
+  if (!error.empty()) throw std::runtime_error("HDF5 output: " + error);
 }
 
 // Collective, like the close it makes; removes the incomplete file.
@@ -425,7 +425,7 @@ Hdf5Output::Hdf5Output(const std::string& dir, MPI_Comm comm, const Scene& scene
   m.comm = comm;
   m.ni = ni;
   m.nj = nj;
-  MPI_Comm_rank(comm, &m.rank);
+  m.rank = rank_of(comm);
   try {
     if (resume_step < 0 || !m.reopen(scene_toml, resume_step)) m.open(scene, scene_toml, fabric);
   } catch (...) {
