@@ -265,7 +265,7 @@ TEST(BandCompression, ALineOfTheChosenModulusAndTensionUnchanged) {
   for (const TensileKES& k : {kes, curve}) {
     const Band none = Band::tensile(k), some = Band::tensile(k, 0.1);
     const double kc = 0.1 * k.fm / k.emt, eps = Band::kCompressionOnset * k.emt;
-    for (double q : {-0.02, -0.01, -1.01 * eps}) {
+    for (double q : {-0.2, -0.05, -1.01 * eps}) {
       const BandValue v = some.at(q);
       EXPECT_DOUBLE_EQ(v.lo, kc * (q + eps / 2));  // the line, past the onset
       EXPECT_DOUBLE_EQ(v.hi, v.lo);

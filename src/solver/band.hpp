@@ -20,13 +20,14 @@ struct BandExcess {
 
 class Band {
  public:
-  static constexpr double kCompressionOnset = 0.02;
+  static constexpr double kCompressionOnset = 0.5;
   Band() = default;
   // Stretch: q = strain. Loading curve Fm*(q/EMT)^n with n = 2/LT - 1, so its
   // area to EMT is WT; unloading Fm*(q/EMT)^m with area RT*WT (or measured
   // curves); past EMT both follow the loading tangent. In compression, which
   // KES does not measure, the band is a line of slope `compression`*(Fm/EMT),
-  // reached over the first kCompressionOnset*EMT of shortening.
+  // reached over the first kCompressionOnset*EMT of shortening (a steeper onset
+  // made Newton's tangent jump: Peirce's strip crept on instead of settling).
   static Band tensile(const TensileKES& k, double compression = 0);
   // Bending and shear: f = slope*q +- half_width, or measured curves.
   static Band linear(double slope, double half_width, const Curve& load = {},

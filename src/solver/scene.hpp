@@ -22,14 +22,15 @@ struct ClothSpec {
   int clamp = 0;                             // rows i < clamp held fixed (a platform)
   // Slope of the force inside a KES band, as a multiple of the loading
   // curve's (Band::set_reversal), per kind of band. 0 is the band taken
-  // literally; > 1 dissipates as a KES loop does.
-  double bend_reversal = 0;
-  double shear_reversal = 0;
-  double stretch_reversal = 0;
+  // literally, whose loop runs backwards and feeds the cloth energy; > 1
+  // dissipates as a KES loop does.
+  double bend_reversal = 5;
+  double shear_reversal = 5;
+  double stretch_reversal = 5;
   // In-plane compression: woven cloth buckles out of its plane rather than
-  // shorten its yarns, which KES does not measure. A linear branch of this
-  // fraction of the tensile test's mean modulus Fm/EMT (0: edges may collapse).
-  double compression = 0;
+  // shorten its yarns, which KES does not measure. A branch of this fraction
+  // of the tensile test's mean modulus Fm/EMT (0: edges may collapse).
+  double compression = 0.1;
 };
 
 struct ObstacleSpec {
