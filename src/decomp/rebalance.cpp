@@ -67,13 +67,17 @@ bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, M
   // A few boundary tiles moved usually suffice; METIS's fresh parts, even
   // renamed to overlap the old ones, can move half the cloth.
   std::vector<int> owner = diffuse(tl, now.owner, work, ranks, threshold);
+  double best = partition_with(tl, owner, work, ranks).imbalance;
   out.method = "diffusion";
-  if (partition_with(tl, owner, work, ranks).imbalance > threshold) {
+  if (best > threshold) {  // METIS only if it beats what diffusion reached
     const Partition fresh = partition_tiles(tl, work, comm);
-    if (fresh.imbalance >= now.imbalance) return false;  // METIS cannot do better with these tiles
-    owner = relabel_to_overlap(now.owner, fresh.owner, work, ranks);
-    out.method = "metis";
+    if (fresh.imbalance < best) {
+      owner = relabel_to_overlap(now.owner, fresh.owner, work, ranks);
+      best = fresh.imbalance;
+      out.method = "metis";
+    }
   }
+  if (!(best < now.imbalance)) return false;  // nothing does better with these tiles
   const MigrationStats m = migrate_tiles(c, tl, now.owner, owner, comm);
   d.partition = partition_with(tl, owner, work, ranks);
   d.owned = d.partition.tiles_of(rank);
