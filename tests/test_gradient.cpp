@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "amrc/criterion.hpp"
+#include "solver/kernels.hpp"
 #include "world.hpp"
 
 namespace drape::test {
@@ -175,6 +176,34 @@ TEST(Gradient, NonUnknownsHaveZeroGradient) {
   // The last particle of a row starts no warp... the last row has no warp edge.
   const int64_t last = w.cloth.grid.n() - 1;
   EXPECT_EQ(ga[w.cloth.layout.tension() + 2 * last], 0.0);
+}
+
+// A grid line that turns by a right angle about an axis normal to the
+// bending axis n (n in the plane of both edges, as in a crumpled corner):
+// the bend angle is that between the edges projected normal to n (here both
+// along x: no bending about n), finite, with a gradient that matches central
+// differences. With the plain e1.e2 both of atan2's arguments were zero.
+TEST(BendKernel, RightAngleTurnAboutAnAxisNormalToTheBendingAxis) {
+  const V3<double> n{0, 1, 0};
+  const V3<double> a{-0.7, -0.7, 0}, b{0, 0, 0}, c{0.7, -0.7, 0};
+  V3<double> g[3];
+  const double th = bend_angle(a, b, c, n, g);
+  ASSERT_TRUE(std::isfinite(th));
+  EXPECT_NEAR(th, 0.0, 1e-15);
+  const V3<double> x[3] = {a, b, c};
+  const double eps = 1e-6;
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 3; ++i) {
+      V3<double> xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
+      (&xp[k].x)[i] += eps;
+      (&xm[k].x)[i] -= eps;
+      V3<double> unused[3];
+      const double fd = (bend_angle(xp[0], xp[1], xp[2], n, unused) -
+                         bend_angle(xm[0], xm[1], xm[2], n, unused)) / (2 * eps);
+      const double an = (&g[k].x)[i];
+      ASSERT_TRUE(std::isfinite(an));
+      EXPECT_NEAR(an, fd, 1e-6 * (1 + std::fabs(fd))) << "particle " << k << " axis " << i;
+    }
 }
 
 }  // namespace
