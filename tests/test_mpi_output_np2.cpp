@@ -220,25 +220,27 @@ TEST(ParallelOutput, ScatteredTilesClippedAtTheBorder) {
   check_matches_one_rank("tiles", blocks);
 }
 
-TEST(ParallelOutput, BadFrameOnOneRankFailsOnBoth) {
-  // Rank 1 names a block outside the grid: both ranks must throw rather
-  // than rank 0 waiting in a collective call.
-  const std::string dir = shared_dir("bad_block");
+namespace {
+
+// Each rank writes its half of a frame, changed by `edit(rank, view)`: both
+// ranks must throw, each with `want[rank]` in its message, rather than one
+// waiting in a collective call, and the run must leave nothing behind.
+template <class Edit>
+void expect_refused_on_both(const std::string& name, Edit&& edit, const char* const want[2]) {
+  const std::string dir = shared_dir(name);
   {
     Scene scene;
     Fabric fabric;
     Hdf5Output out(dir, MPI_COMM_WORLD, scene, "", fabric, NI, NJ);
     const int rank = rank_of(MPI_COMM_WORLD);
-    Frame frame(1, {{0, 5, 0, NJ}});
+    Frame frame(1, {{rank * 5, rank ? NI : 5, 0, NJ}});
     FrameView view = frame.view();
-    if (rank == 1) view.owned = {{5, NI + 1, 0, NJ}};
+    edit(rank, view);
     try {
       out.write_frame(view);
       ADD_FAILURE() << "rank " << rank << " wrote the frame";
-    } catch (const std::runtime_error& e) {  // each rank says whose frame it was
-      EXPECT_NE(std::string(e.what()).find(rank == 1 ? "outside the grid" : "another rank's frame"),
-                std::string::npos)
-          << e.what();
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(want[rank]), std::string::npos) << e.what();
     }
   }
   MPI_Barrier(MPI_COMM_WORLD);
@@ -248,30 +250,22 @@ TEST(ParallelOutput, BadFrameOnOneRankFailsOnBoth) {
   MPI_Barrier(MPI_COMM_WORLD);
 }
 
+}  // namespace
+
+TEST(ParallelOutput, BadFrameOnOneRankFailsOnBoth) {
+  // Rank 1 names a block outside the grid; each rank says whose frame it was.
+  const char* const want[2] = {"another rank's frame", "outside the grid"};
+  expect_refused_on_both("bad_block", [](int rank, FrameView& v) {
+    if (rank == 1) v.owned = {{5, NI + 1, 0, NJ}};
+  }, want);
+}
+
 TEST(ParallelOutput, RanksDisagreeingOnTheArraysFailOnBoth) {
-  // Dataset creation is collective: a frame with shear on one rank only
-  // must be refused on both before any of it is written.
-  const std::string dir = shared_dir("disagree");
-  {
-    Scene scene;
-    Fabric fabric;
-    Hdf5Output out(dir, MPI_COMM_WORLD, scene, "", fabric, NI, NJ);
-    const int rank = rank_of(MPI_COMM_WORLD);
-    Frame frame(1, {{rank * 5, rank ? NI : 5, 0, NJ}});
-    FrameView view = frame.view();
-    if (rank == 1) view.shear = nullptr;
-    try {
-      out.write_frame(view);
-      ADD_FAILURE() << "rank " << rank << " wrote the frame";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find("ranks disagree"), std::string::npos) << e.what();
-    }
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
-  if (rank_of(MPI_COMM_WORLD) == 0) {
-    EXPECT_TRUE(fs::is_empty(dir));
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
+  // Dataset creation is collective: shear on one rank only is refused on both.
+  const char* const want[2] = {"ranks disagree", "ranks disagree"};
+  expect_refused_on_both("disagree", [](int rank, FrameView& v) {
+    if (rank == 1) v.shear = nullptr;
+  }, want);
 }
 
 TEST(ParallelOutput, AbandonedRunLeavesNothing) {
