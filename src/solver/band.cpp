@@ -18,7 +18,6 @@ Band Band::tensile(const TensileKES& k, double compression) {
   }
   b.kind_ = Kind::PowerLaw;
   b.fm_ = k.fm;
-  b.emt_ = k.emt;
   // Area of Fm*(q/EMT)^n over [0, EMT] is Fm*EMT/(n+1): equate to WT and RT*WT.
   b.n_load_ = 2.0 / k.lt - 1.0;
   b.n_unload_ = 2.0 / (k.lt * k.rt) - 1.0;

@@ -73,9 +73,9 @@ class Band {
 
  private:
   enum class Kind { PowerLaw, Linear, Table } kind_ = Kind::Linear;
-  double fm_ = 0, emt_ = 1, n_load_ = 1, n_unload_ = 1;  // PowerLaw
+  double fm_ = 0, n_load_ = 1, n_unload_ = 1;  // PowerLaw
   bool tensile_ = false;
-  double kc_ = 0;  // tensile: the compression branch's slope
+  double emt_ = 1, kc_ = 0;  // tensile: EMT, and the compression branch's slope
   double slope_ = 0, half_ = 0;                          // Linear
   Curve load_, unload_;                                  // Table
   double reversal_ = 0;
