@@ -9,10 +9,12 @@
 #include <mpi.h>
 #include <omp.h>
 
+#include <CLI/CLI.hpp>
+#include <sstream>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 
 #include "decomp/decomposition.hpp"
 #include "io/json.hpp"
@@ -66,9 +68,18 @@ int main(int argc, char** argv) {
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   int n = 1000, iterations = 20, rank = 0, ranks = 1;
-  for (int a = 1; a + 1 < argc; a += 2) {
-    if (!std::strcmp(argv[a], "--size")) n = std::atoi(argv[a + 1]);
-    else if (!std::strcmp(argv[a], "--iterations")) iterations = std::atoi(argv[a + 1]);
+  CLI::App app{"ranks_threads: CG and Newton iterations on this rank layout (under mpirun)"};
+  app.option_defaults()->always_capture_default();
+  app.add_option("--size", n, "particles per side")->check(CLI::Range(9, 100000));
+  app.add_option("--iterations", iterations, "iterations of each solver")->check(CLI::Range(1, 1000000));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {  // every rank parses the same flags: all leave alike
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    std::ostringstream quiet;  // rank 0 alone says what was wrong
+    const int code = (rank == 0 ? app.exit(e) : app.exit(e, quiet, quiet)) == 0 ? 0 : 2;
+    MPI_Finalize();
+    return code;
   }
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);

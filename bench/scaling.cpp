@@ -10,11 +10,12 @@
 // the median is reported.
 #include <omp.h>
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <string>
 
@@ -68,13 +69,18 @@ int main(int argc, char** argv) {
   int n = 1000, iterations = 100, max_threads = omp_get_num_procs(), repeat = 1;
   bool amrc = false;
   std::string out = "scaling.json";
-  for (int a = 1; a + 1 < argc; a += 2) {
-    if (!std::strcmp(argv[a], "--size")) n = std::atoi(argv[a + 1]);
-    else if (!std::strcmp(argv[a], "--iterations")) iterations = std::atoi(argv[a + 1]);
-    else if (!std::strcmp(argv[a], "--threads")) max_threads = std::atoi(argv[a + 1]);
-    else if (!std::strcmp(argv[a], "--out")) out = argv[a + 1];
-    else if (!std::strcmp(argv[a], "--repeat")) repeat = std::max(1, std::atoi(argv[a + 1]));
-    else if (!std::strcmp(argv[a], "--amrc")) amrc = std::atoi(argv[a + 1]) != 0;
+  CLI::App app{"scaling: the paper's Table 2 / Fig. 8, each schedule at 1..N threads"};
+  app.option_defaults()->always_capture_default();
+  app.add_option("--size", n, "particles per side")->check(CLI::Range(9, 100000));
+  app.add_option("--iterations", iterations, "CG iterations per configuration")->check(CLI::Range(1, 1000000));
+  app.add_option("--threads", max_threads, "up to this many threads")->check(CLI::Range(1, 1024));
+  app.add_option("--repeat", repeat, "rounds, interleaved; the median is reported")->check(CLI::Range(1, 1000));
+  app.add_option("--amrc", amrc, "1: on an uneven AMRC mesh");
+  app.add_option("--out", out, "JSON file to write");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help: 0; a bad flag: its message and 2
   }
   const Schedule schedules[] = {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided};
   // times[schedule][threads-1] over the rounds
