@@ -1,6 +1,7 @@
 // The model's behaviour: CG descent, free fall, mass, contact.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "world.hpp"
@@ -54,6 +55,42 @@ TEST_P(Minimizers, LowerTheCostAtEveryIterationAndConverge) {
 
 INSTANTIATE_TEST_SUITE_P(Both, Minimizers, ::testing::Values(SolverMethod::Cg, SolverMethod::Newton),
                          [](const auto& info) { return std::string(to_string(info.param)); });
+
+// Each triple bends about the other yarn's tangent at the step's start, less
+// its part along the triple's own line: on an unsheared cloth exactly that
+// tangent, on a sheared one still normal to the line (so the line's edges
+// stay clear of the axis, where the angle about it is undefined).
+TEST(BendAxes, NormalToTheirLineTheOtherYarnWhenUnsheared) {
+  Scene s = flat_scene(6, 5, 0.05, 0.04);
+  World w(s, test_fabric());
+  const Grid& g = w.cloth.grid;
+  auto axis = [&](int64_t p, int d) {
+    const double* a = &w.cloth.bend_axis[6 * p + 3 * d];
+    return std::array<double, 3>{a[0], a[1], a[2]};
+  };
+  w.loop->freeze_bend_axes();
+  for (int i = 1; i + 1 < g.ni; ++i)
+    for (int j = 1; j + 1 < g.nj; ++j) {
+      const int64_t p = g.id(i, j);
+      EXPECT_EQ(axis(p, 0), (std::array<double, 3>{0, 1, 0})) << i << "," << j;
+      EXPECT_EQ(axis(p, 1), (std::array<double, 3>{-1, 0, 0})) << i << "," << j;
+    }
+  // Weft lines leaning towards the warp by 0.8 (a 39 degree shear).
+  for (int i = 0; i < g.ni; ++i)
+    for (int j = 0; j < g.nj; ++j) w.cloth.x1[3 * g.id(i, j)] += 0.8 * j * g.hj;
+  w.loop->freeze_bend_axes();
+  const double lean = 1 / std::sqrt(1 + 0.8 * 0.8);
+  for (int i = 1; i + 1 < g.ni; ++i)
+    for (int j = 1; j + 1 < g.nj; ++j) {
+      const int64_t p = g.id(i, j);
+      const auto a = axis(p, 0), b = axis(p, 1);
+      EXPECT_NEAR(a[0], 0.0, 1e-12);  // normal to the warp line (x)
+      EXPECT_NEAR(a[1], 1.0, 1e-12);
+      EXPECT_NEAR(b[0] * 0.8 * lean + b[1] * lean, 0.0, 1e-12);  // normal to the weft line
+      EXPECT_NEAR(b[0] * b[0] + b[1] * b[1] + b[2] * b[2], 1.0, 1e-12);
+      EXPECT_LT(b[0], 0.0);  // still minus the warp side
+    }
+}
 
 TEST(FreeFall, FollowsGravity) {
   Scene s = flat_scene(9, 8, 0.2, 0.15);

@@ -29,13 +29,24 @@ void TimeLoop::freeze_bend_axes() {
     const double len = std::sqrt(dot(t, t));
     return len > 0 ? (1.0 / len) * t : V3<double>{0, 0, 0};
   };
+  // The other yarn's tangent, less its part along the line's own: the axis
+  // is then normal to the line, so its edges stay clear of it (an edge along
+  // the axis leaves the angle undefined: a corner folded onto its diagonal
+  // neighbour laid one there). On an unsheared cloth nothing changes.
+  auto axis = [](const V3<double>& other, const V3<double>& own) {
+    const V3<double> a = other - dot(other, own) * own;
+    const double len = std::sqrt(dot(a, a));
+    return len > 1e-3 ? (1.0 / len) * a : other;
+  };
   const int64_t n = g.n();
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < n; ++p) {
     // A warp triple bends about the weft tangent, a weft triple about minus
     // the warp tangent: both then count bending towards -normal as positive.
-    if (c_.triple_on[2 * p]) store3(tangent(p, 1), &c_.bend_axis[6 * p]);
-    if (c_.triple_on[2 * p + 1]) store3(-1.0 * tangent(p, 0), &c_.bend_axis[6 * p + 3]);
+    if (!c_.triple_on[2 * p] && !c_.triple_on[2 * p + 1]) continue;
+    const V3<double> warp = tangent(p, 0), weft = tangent(p, 1);
+    if (c_.triple_on[2 * p]) store3(axis(weft, warp), &c_.bend_axis[6 * p]);
+    if (c_.triple_on[2 * p + 1]) store3(-1.0 * axis(warp, weft), &c_.bend_axis[6 * p + 3]);
   }
 }
 
