@@ -20,6 +20,25 @@ inline void put(double* out, const V& v) {
 }
 inline V value_of(const V3<Dual>& a) { return {a.x.v, a.y.v, a.z.v}; }
 inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
+
+// Each element's generalized strain at positions x, as its band reads it:
+// edge strain, triple curvature about the frozen axis, shear angle.
+inline double edge_strain(const Cloth& c, const double* x, int64_t s) {
+  const int64_t p = s >> 1;
+  V g[2];
+  return edge_length(at(x, p), at(x, c.next[s & 1][p]), g) / c.edge_rest[s] - 1;
+}
+inline double triple_curvature(const Cloth& c, const double* x, int64_t s) {
+  const int64_t p = s >> 1;
+  const int d = int(s & 1);
+  V g[3];
+  return bend_angle(at(x, c.prev[d][p]), at(x, p), at(x, c.next[d][p]), load3<double>(&c.bend_axis[3 * s]), g) /
+         c.triple_rest[s];
+}
+inline double shear_strain(const Cloth& c, const double* x, int64_t s) {
+  V g[3];
+  return shear_angle(at(x, s), at(x, c.next[0][s]), at(x, c.next[1][s]), g);
+}
 }  // namespace
 
 void Evaluator::hysteresis_forces(double* z) {
@@ -28,24 +47,13 @@ void Evaluator::hysteresis_forces(double* z) {
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();  // anchors are indexed from the tension block
   for_edges([&](int64_t s) {
-    const int64_t p = s >> 1;
-    const int d = int(s & 1);
-    V g[2];
-    const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
-    z[L.tension() + s] = m_.stretch[d].stop(c_.anchor[s], len / c_.edge_rest[s] - 1).f;
+    z[L.tension() + s] = m_.stretch[s & 1].stop(c_.anchor[s], edge_strain(c_, z, s)).f;
   });
   for_triples([&](int64_t s) {
-    const int64_t p = s >> 1;
-    const int d = int(s & 1);
-    V g[3];
-    const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]),
-                                 load3<double>(&c_.bend_axis[3 * s]), g);
-    z[L.moment() + s] = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / c_.triple_rest[s]).f;
+    z[L.moment() + s] = m_.bend[s & 1].stop(c_.anchor[L.moment() - fo + s], triple_curvature(c_, z, s)).f;
   });
   for_shears([&](int64_t s) {
-    V g[3];
-    const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
-    z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).f;
+    z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], shear_strain(c_, z, s)).f;
   });
 }
 
@@ -55,27 +63,14 @@ void Evaluator::hysteresis_anchors(const double* x1, double* a) {
     return;
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  for_edges([&](int64_t s) {
-    const int64_t p = s >> 1;
-    const int d = int(s & 1);
-    V g[2];
-    const double len = edge_length(at(x1, p), at(x1, c_.next[d][p]), g);
-    a[s] = m_.stretch[d].anchor(a[s], len / c_.edge_rest[s] - 1);
-  });
+  for_edges([&](int64_t s) { a[s] = m_.stretch[s & 1].anchor(a[s], edge_strain(c_, x1, s)); });
   for_triples([&](int64_t s) {
-    const int64_t p = s >> 1;
-    const int d = int(s & 1);
-    V g[3];
-    const double th = bend_angle(at(x1, c_.prev[d][p]), at(x1, p), at(x1, c_.next[d][p]),
-                                 load3<double>(&c_.bend_axis[3 * s]), g);
     double& f = a[L.moment() - fo + s];
-    f = m_.bend[d].anchor(f, th / c_.triple_rest[s]);
+    f = m_.bend[s & 1].anchor(f, triple_curvature(c_, x1, s));
   });
   for_shears([&](int64_t s) {
-    V g[3];
-    const double phi = shear_angle(at(x1, s), at(x1, c_.next[0][s]), at(x1, c_.next[1][s]), g);
     double& f = a[L.shear() - fo + s];
-    f = m_.shear.anchor(f, phi);
+    f = m_.shear.anchor(f, shear_strain(c_, x1, s));
   });
 }
 
