@@ -110,27 +110,33 @@ void build_ring(const std::vector<int64_t>& ring, int per_particle, Pred on, Act
 
 }  // namespace
 
-void ListCuts::reset(int64_t n, int threads) {
+void ListCuts::reset(int64_t len, int threads) {
+  n = len;
+  // A tail only where each piece still holds enough items to be worth a handout.
+  pieces = threads > 1 ? 4 * threads : 0;
+  const int64_t tail = pieces > 0 && len >= 256 * pieces ? len / 16 : 0;
+  if (tail == 0) pieces = 0;
+  const int64_t head = len - tail;
   cut.resize(threads + 1);
   next.resize(threads + 1);
   seconds.assign(threads, 0.0);
-  for (int t = 0; t <= threads; ++t) cut[t] = n * t / threads;
+  for (int t = 0; t <= threads; ++t) cut[t] = head * t / threads;
 }
 
 void ListCuts::rebalance() {
   const int T = int(cut.size()) - 1;
   if (T <= 1) return;
-  const int64_t n = cut[T];
+  const int64_t head = cut[T];  // the tail is not cut
   double total = 0;
   for (double s : seconds) total += s;
-  if (n == 0 || !(total > 0)) return;
-  const double mean = total / double(n);  // per item, for chunks without items
+  if (head == 0 || !(total > 0)) return;
+  const double mean = total / double(head);  // per item, for chunks without items
   // Where the cumulative measured time (linear within each chunk) reaches
   // k/T of the total: the cut that would have balanced the last pass.
   int q = 0;
   double before = 0;  // time of the chunks before q
   next[0] = 0;
-  next[T] = n;
+  next[T] = head;
   for (int k = 1; k < T; ++k) {
     const double want = total * k / T;
     while (q < T - 1 && before + seconds[q] < want) before += seconds[q++];
@@ -140,7 +146,7 @@ void ListCuts::rebalance() {
     next[k] = std::clamp<int64_t>(int64_t(x), cut[q], cut[q + 1]);
   }
   for (int k = 1; k < T; ++k)  // halfway: damps the noise of one pass
-    cut[k] = std::clamp<int64_t>(cut[k] + (next[k] - cut[k]) / 2, cut[k - 1], n);
+    cut[k] = std::clamp<int64_t>(cut[k] + (next[k] - cut[k]) / 2, cut[k - 1], head);
 }
 
 void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned,

@@ -14,20 +14,25 @@ namespace drape {
 
 class Quadtree;
 
-// How a list is split among the threads: one chunk each. The paper cuts
-// equal counts. On an uneven mesh equal counts are not equal times (a coarse
-// region's elements lie far apart in memory and cost more each), so the cuts
-// start equal and, after every pass, move halfway towards where the threads'
-// measured times would have been equal. Each kind of pass over a list (forces,
-// gradient, ...) has its own cuts: their costs per item differ. Which thread
-// does an item never changes a result (kernels write per slot).
+// How a list is split among the threads: one chunk each, then a shared
+// tail. The paper cuts equal counts. On an uneven mesh equal counts are not
+// equal times (a coarse region's elements lie far apart in memory and cost
+// more each), so the cuts start equal and, after every pass, move halfway
+// towards where the threads' measured times would have been equal. Each
+// kind of pass over a list (forces, gradient, ...) has its own cuts: their
+// costs per item differ. What cuts cannot foresee (another process taking a
+// core for a moment) the tail absorbs: the list's last 1/16, in small pieces
+// that threads take as they finish their chunks. Which thread does an item
+// never changes a result (kernels write per slot).
 struct ListCuts {
-  std::vector<int64_t> cut;     // threads + 1 bounds into the list
+  std::vector<int64_t> cut;     // threads + 1 bounds into the list's head [0, cut.back())
   std::vector<int64_t> next;    // scratch for rebalance()
   std::vector<double> seconds;  // each chunk's time in the last pass
-  bool fits(int64_t n, int threads) const { return int(cut.size()) == threads + 1 && cut.back() == n; }
-  void reset(int64_t n, int threads);  // equal counts
-  void rebalance();                    // serial, after a pass
+  int64_t n = 0;                // the list's length: [cut.back(), n) is the tail
+  int pieces = 0;               // the tail's pieces
+  bool fits(int64_t len, int threads) const { return int(cut.size()) == threads + 1 && n == len; }
+  void reset(int64_t len, int threads);  // equal counts
+  void rebalance();                      // serial, after a pass
 };
 
 struct ActiveList {

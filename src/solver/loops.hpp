@@ -84,7 +84,8 @@ int pass_kind() {
 }
 
 // The paper's active lists: one chunk of the list per thread (ListCuts), each
-// chunk timed so that the cuts follow the measured cost of this kind of pass.
+// chunk timed so that the cuts follow the measured cost of this kind of pass,
+// then the list's tail in small pieces to whichever thread is free.
 template <class F>
 void for_each_chunk(const ActiveList& list, F&& f) {
   const int chunks = omp_get_max_threads();
@@ -98,6 +99,8 @@ void for_each_chunk(const ActiveList& list, F&& f) {
   const int64_t* items = list.items.data();
   const int64_t* cut = c.cut.data();
   double* seconds = c.seconds.data();
+  const int64_t head = c.cut.back(), tail = c.n - head;
+  const int pieces = c.pieces;
   timed_region([&] {
     // One chunk per thread; any other team size still covers every chunk.
 #pragma omp for schedule(static, 1) nowait
@@ -106,6 +109,10 @@ void for_each_chunk(const ActiveList& list, F&& f) {
       for (int64_t k = cut[q]; k < cut[q + 1]; ++k) f(items[k]);
       seconds[q] = omp_get_wtime() - t0;
     }
+    // The tail, taken piece by piece by whoever is done first.
+#pragma omp for schedule(dynamic, 1) nowait
+    for (int q = 0; q < pieces; ++q)
+      for (int64_t k = head + tail * q / pieces; k < head + tail * (q + 1) / pieces; ++k) f(items[k]);
   });
   c.rebalance();
 }
