@@ -11,10 +11,15 @@ drape=$1 mpiexec=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
 sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
-for method in newton cg amrc; do
+sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2)
+for method in newton cg amrc sequence; do
   args=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
         --set solver.steps=40 --set output.every=10 --quiet)
-  if [[ $method == amrc ]]; then args+=("${amrc[@]}"); else args+=(--set solver.method=$method); fi
+  case $method in
+    amrc) args+=("${amrc[@]}") ;;
+    sequence) args+=("${sequence[@]}") ;;
+    *) args+=(--set solver.method=$method) ;;
+  esac
   if [[ $method == newton ]]; then
     args+=(--set cloth.bend_reversal=5 --set cloth.shear_reversal=3 --set cloth.stretch_reversal=2 --set solver.drag=3 --set cloth.height=0.43)
   fi
@@ -35,4 +40,10 @@ for method in newton cg amrc; do
     echo "$method: 1 and $n ranks agree: $one"
   done
   grep -q '"iterations": [1-9]' "$work/$method-1/report.json" || { echo "$method: no iterations ran"; exit 1; }
+  if [[ $method == sequence ]]; then
+    stages=$(python3 -c 'import json,sys; print(" ".join("%d@%d" % (g["level"], g["from_step"]) for g in json.load(open(sys.argv[1]))["stages"]))' \
+             "$work/$method-1/report.json")
+    [[ $stages == "1@0 0@3" ]] || { echo "sequence: stages $stages, expected level 1 from step 0, level 0 from step 3"; exit 1; }
+    echo "sequence: stages $stages"
+  fi
 done

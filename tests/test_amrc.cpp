@@ -9,8 +9,10 @@
 #include <cmath>
 #include <random>
 
+#include "amrc/amrc.hpp"
 #include "amrc/criterion.hpp"
 #include "amrc/quadtree.hpp"
+#include "amrc/sequence.hpp"
 #include "solver/cloth.hpp"
 #include "world.hpp"
 
@@ -313,6 +315,69 @@ TEST(AmrcMesh, ForceOnSurvivingParticlesStaysBalancedAcrossSplitAndMerge) {
   EXPECT_LE(merged, 0.25 * coarse_edge) << "after the merge";
   std::printf("largest interior force / (T h_c): uniform %.3g, split %.3g, merged %.3g\n",
               before / coarse_edge, split / coarse_edge, merged / coarse_edge);
+}
+
+}  // namespace
+}  // namespace drape::test
+
+namespace drape::test {
+namespace {
+
+// Grid sequencing's first mesh: the coarsest within the spacing, keeping at
+// least 8 intervals per side.
+TEST(GridSequence, StartLevelFromTheSpacing) {
+  auto level = [](int n, double size, double spacing) {
+    Grid g;
+    g.ni = g.nj = n;
+    g.hi = g.hj = size / (n - 1);
+    return sequence_start_level(g, spacing);
+  };
+  EXPECT_EQ(level(1000, 1.0, 0.04), 5);  // h = 1 mm: 32 mm leaves
+  EXPECT_EQ(level(1000, 1.0, 0.0), 0);
+  EXPECT_EQ(level(257, 1.0, 0.04), 3);   // 3.9 mm -> 31 mm
+  EXPECT_EQ(level(49, 1.0, 0.04), 0);    // 20.8 mm: one level up is already too coarse
+  EXPECT_EQ(level(17, 1.0, 10.0), 1);    // 16 intervals: 8 per side at level 1, no further
+}
+
+// Uniform levels keep the finest mesh's mass, and every finer mesh starts on
+// the coarser one's surface with its forces: an affine cloth stays affine,
+// a uniform tension stays uniform, through levels 2, 1 and 0.
+TEST(GridSequence, UniformLevelsCarryTheState) {
+  Scene s = flat_scene(19, 23, 0.18, 0.22);
+  World w(s, test_fabric());
+  Cloth& c = w.cloth;
+  const double mass = c.total_mass();
+  auto affine = [&](int64_t p, int a) {
+    const double i = c.grid.i_of(p), j = c.grid.j_of(p);
+    const double row[3][3] = {{0.01, 0.002, 0.1}, {-0.003, 0.012, 0.2}, {0.004, -0.005, 0.45}};
+    return row[a][0] * i + row[a][1] * j + row[a][2];
+  };
+  Amrc amrc(c, 2);
+  amrc.set_uniform_level(c, w.fabric.density, s.cloth.shear, 2);
+  int64_t coarse = 0;
+  for (int64_t p = 0; p < c.grid.n(); ++p) {
+    if (!c.active(p)) continue;
+    ++coarse;
+    for (int a = 0; a < 3; ++a) c.z[3 * p + a] = c.x1[3 * p + a] = c.x2[3 * p + a] = affine(p, a);
+    for (int d = 0; d < 2; ++d)
+      if (c.edge_on[2 * p + d]) c.z[c.layout.tension() + 2 * p + d] = 7.0;
+  }
+  EXPECT_EQ(coarse, 6 * 7) << "18 x 22 intervals in leaves of 4 (clipped at the far sides)";
+  EXPECT_NEAR(c.total_mass(), mass, 1e-12 * mass);
+  for (int level : {1, 0}) {
+    amrc.set_uniform_level(c, w.fabric.density, s.cloth.shear, level);
+    EXPECT_NEAR(c.total_mass(), mass, 1e-12 * mass) << "level " << level;
+    for (int64_t p = 0; p < c.grid.n(); ++p) {
+      if (!c.active(p)) continue;
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_NEAR(c.z[3 * p + a], affine(p, a), 1e-12) << "level " << level << ", particle " << p;
+        ASSERT_NEAR(c.x1[3 * p + a], affine(p, a), 1e-12);
+      }
+      for (int d = 0; d < 2; ++d)
+        if (c.edge_on[2 * p + d]) ASSERT_EQ(c.z[c.layout.tension() + 2 * p + d], 7.0) << "level " << level;
+    }
+  }
+  for (int64_t p = 0; p < c.grid.n(); ++p) ASSERT_TRUE(c.active(p)) << "level 0 is the finest mesh";
 }
 
 }  // namespace

@@ -397,6 +397,8 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
       {"key_imbalance", {"--set", "parallel.imbalance=0.9"}, {"parallel.imbalance", ">= 1"}},
       {"key_reversal", {"--set", "cloth.shear_reversal=0.5"}, {"cloth.shear_reversal", "> 1"}},
       {"key_compression", {"--set", "cloth.compression=-0.1"}, {"cloth.compression", "[0, 1]"}},
+      {"key_start_spacing", {"--set", "amrc.start_spacing=-0.04"}, {"amrc.start_spacing", ">= 0"}},
+      {"key_stage_drag", {"--set", "amrc.stage_drag=-1"}, {"amrc.stage_drag", ">= 0"}},
       {"key_amrc_numeric", {"--set", "cloth.particles=[9,9]", "--set", "amrc.enabled=true", "--set",
                             "solver.gradient=numeric"},
        {"amrc.enabled", "analytic"}},

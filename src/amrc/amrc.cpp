@@ -111,6 +111,18 @@ AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, doub
   old_ = tree_;
   const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen, cells_);
   if (st.refined == 0 && st.coarsened == 0) return st;
+  carry_over(c, density, shear);
+  return st;
+}
+
+void Amrc::set_uniform_level(Cloth& c, double density, bool shear, int level) {
+  old_ = tree_;
+  std::vector<uint8_t> levels(tree_.levels().size(), uint8_t(level));
+  tree_.set_levels(levels);
+  carry_over(c, density, shear);
+}
+
+void Amrc::carry_over(Cloth& c, double density, bool shear) {
   const int64_t n = c.grid.n();
   for (int64_t p = 0; p < n; ++p) was_active_[p] = c.active(p);
   // Newly active particles: positions and history on the old leaf's surface;
@@ -150,7 +162,6 @@ AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, doub
     carry(L.moment(), 2, triple_on_);
     carry(L.shear(), 1, shear_on_);
   }
-  return st;
 }
 
 }  // namespace drape

@@ -44,6 +44,10 @@ class Amrc {
   AdaptStats adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
                    const AdaptShare& share = {});
 
+  // Grid sequencing (sequence.hpp): every leaf at `level`, the state carried
+  // over as adapt() does. Between runs of time steps, like adapt().
+  void set_uniform_level(Cloth& c, double density, bool shear, int level);
+
   // Applies the current tree to the cloth (marks, topology, geometry, masses).
   void apply(Cloth& c, double density, bool shear) const;
 
@@ -56,6 +60,9 @@ class Amrc {
   void fill_inactive(Cloth& c) const;
 
  private:
+  // After tree_ changed from old_: the new mesh, with the state carried over.
+  void carry_over(Cloth& c, double density, bool shear);
+
   Quadtree tree_, old_;
   std::vector<double> indicator_;
   std::vector<Cell> cells_;  // adapt's scratch, reserved for every leaf

@@ -55,7 +55,18 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("enabled", scene.amrc.enabled)
       .value("refined", (long long)s.refined)
       .value("coarsened", (long long)s.coarsened)
+      .value("start_spacing", scene.amrc.start_spacing)
       .end_object();
+  // Grid sequencing: each uniform mesh, from the step it took over at.
+  j.begin_array("stages");
+  for (const Summary::Stage& g : s.stages)
+    j.begin_object()
+        .value("from_step", g.step)
+        .value("from_time", g.time)
+        .value("level", g.level)
+        .value("particles", (long long)g.particles)
+        .end_object();
+  j.end_array();
   j.begin_array("grid").value(nullptr, cloth.grid.ni).value(nullptr, cloth.grid.nj).end_array();
   j.value("free_particles", (long long)free_particles);
   const RunCounters& n = s.counters;

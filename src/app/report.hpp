@@ -42,6 +42,14 @@ struct Summary {
   int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
   int64_t refined = 0, coarsened = 0;                         // AMRC operations
   std::vector<Rebalance> rebalances;                          // after AMRC, several ranks
+  // Grid sequencing: where each uniform mesh took over.
+  struct Stage {
+    int step;
+    double time;
+    int level;
+    int64_t particles;
+  };
+  std::vector<Stage> stages;
 };
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);

@@ -18,6 +18,7 @@
 #include "amrc/active_lists.hpp"
 #include "amrc/amrc.hpp"
 #include "amrc/remesh.hpp"
+#include "amrc/sequence.hpp"
 #include "decomp/collective.hpp"
 #include "decomp/decomposition.hpp"
 #include "decomp/gather.hpp"
@@ -126,6 +127,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   ActiveLists lists;
   Decomposition dec;
   std::unique_ptr<Amrc> amrc;
+  int sequence_level = 0;  // grid sequencing: the uniform mesh's level now (0: finest, or off)
   Summary sum;
   int last_frame = -1;  // the step of the last frame written (-1: none yet)
   {
@@ -138,15 +140,25 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       sum.counters = opt.restart->counters;
       sum.first_step = cloth.step;
     }
-    if (scene.amrc.enabled) {  // from the finest mesh (paper), or the checkpoint's
-      amrc = std::make_unique<Amrc>(cloth, scene.amrc.max_level);
-      if (opt.restart && !opt.restart->amrc_levels.empty()) amrc->restore(opt.restart->amrc_levels);
+    // A restart goes on on its checkpoint's mesh: the finest one where it holds no tree.
+    if (!scene.amrc.enabled && !(opt.restart && opt.restart->amrc_levels.empty()))
+      sequence_level = sequence_start_level(cloth.grid, scene.amrc.start_spacing);
+    if (scene.amrc.enabled || sequence_level > 0) {  // from the finest mesh (paper), or the checkpoint's
+      amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level);
+      if (opt.restart && !opt.restart->amrc_levels.empty()) {
+        amrc->restore(opt.restart->amrc_levels);
+        if (sequence_level > 0) sequence_level = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];
+      } else if (sequence_level > 0) {
+        amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, sequence_level);
+      }
       amrc->apply(cloth, fabric.density, scene.cloth.shear);
     }
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
+    if (sequence_level > 0) model.drag = std::max(scene.solver.drag, scene.amrc.stage_drag);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
     // refuses more ranks than tiles
-    dec = decompose(cloth, tiling, comm, ghost_widths(scene.amrc.enabled, scene.amrc.max_level));
+    dec = decompose(cloth, tiling, comm,
+                    ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0));
   }
   make_output_dir(opt.output_dir, comm, rank);
   const std::vector<int64_t> no_ring;
@@ -157,6 +169,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   };
   rebuild_lists();
   sum.active_min = sum.active_max = sum.active_final = active_particles(cloth);
+  if (sequence_level > 0) sum.stages.push_back({cloth.step, cloth.time, sequence_level, sum.active_final});
   const std::vector<int>& owned = dec.owned;
   const Reducer& red = *dec.reducer;
   LoopPolicy policy{scene.parallel.schedule, scene.parallel.chunk};
@@ -235,17 +248,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   int last_checkpoint = opt.restart ? cloth.step : -1;
   // AMRC between steps (the paper checks every few CG iterations; between
   // steps the minimiser never sees the mesh change under it).
-  auto adapt_mesh = [&] {
-    AdaptStats a;
-    {
-      ScopedPhase ph(tm, kAmrc);
-      loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
-      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen,
-                      {&tiling, &dec.owned, &red});
-    }
-    sum.refined += a.refined;
-    sum.coarsened += a.coarsened;
-    if (a.refined == 0 && a.coarsened == 0) return;
+  auto mesh_changed = [&] {
     amrc->lift_new_particles(cloth, model.contact);
     if (ranks > 1) {
       ScopedPhase ph(tm, kMigrate);
@@ -268,6 +271,32 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.active_max = std::max(sum.active_max, active);
     sum.active_final = active;
   };
+  auto adapt_mesh = [&] {
+    AdaptStats a;
+    {
+      ScopedPhase ph(tm, kAmrc);
+      loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
+      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen,
+                      {&tiling, &dec.owned, &red});
+    }
+    sum.refined += a.refined;
+    sum.coarsened += a.coarsened;
+    if (a.refined != 0 || a.coarsened != 0) mesh_changed();
+  };
+  // Grid sequencing: the cloth at rest on a coarse mesh goes on on the next finer one.
+  auto refine_everywhere = [&] {
+    {
+      ScopedPhase ph(tm, kAmrc);
+      loop.refresh_ghosts(true);
+      amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level);
+    }
+    if (sequence_level == 0) model.drag = scene.solver.drag;  // the finest mesh: the scene's physics
+    mesh_changed();
+    sum.stages.push_back({cloth.step, cloth.time, sequence_level, sum.active_final});
+    if (talk)
+      std::printf("at rest after step %d (t = %.4g s): every leaf split, level %d now, %lld particles\n",
+                  cloth.step, cloth.time, sequence_level, (long long)sum.active_final);
+  };
   const LoopClock clock0 = loop_clock();
   const auto stepping0 = std::chrono::steady_clock::now();
   while (cloth.step < scene.solver.steps) {
@@ -282,12 +311,17 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed)
                             ? sum.counters.calm + 1 : 0;
     sum.at_rest = sum.counters.calm >= 3;
+    if (sum.at_rest && sequence_level > 0 && !last) {
+      refine_everywhere();
+      sum.counters.calm = 0;
+      sum.at_rest = false;
+    }
     if (!last && !sum.at_rest && every > 0 && st.step % every == 0) {
       ScopedPhase ph(tm, kOutput);
       write_frame();
       last_frame = st.step;
     }
-    if (amrc && st.step % scene.amrc.every == 0) adapt_mesh();
+    if (scene.amrc.enabled && st.step % scene.amrc.every == 0) adapt_mesh();
     if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
     if (sum.at_rest || reached || stop_now()) break;
   }

@@ -86,6 +86,8 @@ const KeySpec kKeys[] = {
     {"amrc", "refine", Kind::Float},
     {"amrc", "coarsen", Kind::Float},
     {"amrc", "every", Kind::Int},
+    {"amrc", "start_spacing", Kind::Float},
+    {"amrc", "stage_drag", Kind::Float},
 };
 
 const char* const kSections[] = {"cloth", "obstacle", "solver", "output", "parallel", "amrc"};
@@ -509,6 +511,8 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("amrc.refine", s.amrc.refine);
   r.get("amrc.coarsen", s.amrc.coarsen);
   r.get("amrc.every", s.amrc.every);
+  r.get("amrc.start_spacing", s.amrc.start_spacing);
+  r.get("amrc.stage_drag", s.amrc.stage_drag);
 }
 
 // ------------------------------------------------------------ validation --
@@ -602,6 +606,9 @@ void validate(const Config& cfg, const Scene& s) {
   check(a.coarsen >= 0 && a.coarsen < a.refine, check.given("amrc.coarsen", "amrc.refine"),
         "amrc.coarsen must be in [0, amrc.refine) = [0, " + format_double(a.refine) + ")" + got(a.coarsen));
   check(a.every >= 1, "amrc.every", "must be >= 1, got " + std::to_string(a.every));
+  check(a.start_spacing >= 0, "amrc.start_spacing",
+        "must be >= 0 (m; 0: the run starts on the finest mesh)" + got(a.start_spacing));
+  check(a.stage_drag >= 0, "amrc.stage_drag", "must be >= 0 (1/s)" + got(a.stage_drag));
 }
 
 // ----------------------------------------------------------------- output --
@@ -721,6 +728,9 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "refine", format_double(a.refine), "rad: split where a triple turns more");
   line(os, "coarsen", format_double(a.coarsen), "rad: merge where all turn less (< refine)");
   line(os, "every", std::to_string(a.every), "steps between adaptations");
+  line(os, "start_spacing", format_double(a.start_spacing),
+       "m: without adaptation, start this coarse and refine at each rest (0: finest)");
+  line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on the meshes before the finest");
   return os.str();
 }
 

@@ -87,6 +87,15 @@ struct AmrcSpec {
   double refine = 0.1;          // rad
   double coarsen = 0.02;        // rad, below refine so cells do not flip back and forth
   int every = 3;                // steps between adaptations
+  // Grid sequencing (amrc.enabled = false only): the run starts on a uniform
+  // mesh of spacing at most this (m), and refines it everywhere by one level
+  // each time the cloth comes to rest, until the finest; 0: from the finest.
+  double start_spacing = 0.04;
+  // Air drag (1/s) on those coarser meshes: they are the way to the rest
+  // state, not the result, so they may settle faster than air would let
+  // them (drag vanishes at rest, so it does not move the rest state). The
+  // finest mesh runs with solver.drag.
+  double stage_drag = 10.0;
 };
 
 struct Scene {
