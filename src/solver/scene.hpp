@@ -45,7 +45,7 @@ struct SolverSpec {
   double dt = 1e-3;             // s, first step (adaptive afterwards)
   double dt_min = 1e-5;         // s
   double dt_max = 4e-3;         // s
-  int steps = 2000;             // time steps at most
+  int steps = 100000;           // time steps at most (the wall limit or rest ends a run first)
   int max_iterations = 200;     // CG iterations per step at most
   double tolerance = 1e-6;      // converged when cost per active particle < this
   GradientMode gradient = GradientMode::Analytic;
