@@ -254,7 +254,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   halo_.exchange_particles(rho_.data(), 3);
   hanging_residuals();
   const int64_t nz = c_.layout.size();
-  parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });
+  parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
   for_edges([&](int64_t s) { edge_gradient(s, z, grad); });
   for_triples([&](int64_t s) { triple_gradient(s, z, grad); });
   for_shears([&](int64_t s) { shear_gradient(s, z, grad); });
@@ -324,8 +324,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
-  const int64_t nz = c_.layout.size();
-  parallel_for(nz, [&](int64_t k) { diag[k] = 1.0; });
+  for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
   // band stiffness (lambda * slope * dq/dx)^2, written to the first entry of
   // the particle's buffer slot; the element force's own diagonal directly.
@@ -406,7 +405,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     v[0] = v[1] = v[2] = dsum;
   }, 2.0, 1.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.
-  parallel_for(nz, [&](int64_t k) {
+  for_each_listed(lists_.unknown_spans, [&](int64_t k) {
     if (!(diag[k] > 0)) diag[k] = 1.0;
   });
 }

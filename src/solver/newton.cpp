@@ -59,7 +59,6 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
 
 CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
                                 const std::function<void(int, double)>& on_iteration) {
-  const int64_t n = c_.layout.size();
   const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
   CgResult res;
   {
@@ -69,8 +68,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   }
   res.evaluations = 1;
   double c0 = res.cost.total();
-  double* zt = zt_.data();
-  parallel_for(n, [&](int64_t k) { zt[k] = z[k]; });  // updates touch the unknowns only
+  double* zt = zt_.data();  // the active unknowns before the line search's trials
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;
@@ -80,7 +78,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // d of K d = -rho is the position step divided by F0.
     const std::vector<double>& rho = ev.residual();
     const ActiveList& free = ev.lists().particles;
-    std::fill(b_.begin(), b_.end(), 0.0);
+    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { b_[k] = 0.0; });
     parallel_for(free.size(), [&](int64_t k) {
       for (int i = 0; i < 3; ++i) b_[3 * free.items[k] + i] = -rho[3 * free.items[k] + i];
     });
@@ -91,14 +89,17 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // d_ solves K d = -rho (F0 units): the position step is d * F0.
     const double scale = ev.force_scale();
     bool accepted = false;
+    // Trials in place: each evaluation brings z's ghosts and hanging particles
+    // up to date, so only the active unknowns are saved and restored (a
+    // whole-array copy would cost the finest mesh's price on a coarse one).
+    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { zt[k] = z[k]; });
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
-      for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { zt[k] = z[k] + a * scale * d_[k]; });
-      ev.hysteresis_forces(zt);
-      const CostTerms trial = ev.evaluate(zt, nullptr);
+      for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { z[k] = zt[k] + a * scale * d_[k]; });
+      ev.hysteresis_forces(z);
+      const CostTerms trial = ev.evaluate(z, nullptr);
       ++res.evaluations;
       if (std::isfinite(trial.total()) && trial.total() < c0) {
-        parallel_for(n, [&](int64_t k) { z[k] = zt[k]; });
         res.cost = trial;
         c0 = trial.total();
         accepted = true;
@@ -106,7 +107,8 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
       }
     }
     if (!accepted) {
-      // Leave z's residual buffers consistent with z.
+      // Back to where the line search began; z's residual buffers with it.
+      for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { z[k] = zt[k]; });
       ev.hysteresis_forces(z);
       res.cost = ev.evaluate(z, nullptr);
       res.stalled = true;
