@@ -374,7 +374,9 @@ TEST(GridSequence, UniformLevelsCarryTheState) {
         ASSERT_NEAR(c.x1[3 * p + a], affine(p, a), 1e-12);
       }
       for (int d = 0; d < 2; ++d)
-        if (c.edge_on[2 * p + d]) ASSERT_EQ(c.z[c.layout.tension() + 2 * p + d], 7.0) << "level " << level;
+        if (c.edge_on[2 * p + d]) {
+          ASSERT_EQ(c.z[c.layout.tension() + 2 * p + d], 7.0) << "level " << level;
+        }
     }
   }
   for (int64_t p = 0; p < c.grid.n(); ++p) ASSERT_TRUE(c.active(p)) << "level 0 is the finest mesh";

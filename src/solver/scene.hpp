@@ -66,7 +66,7 @@ struct SolverSpec {
 };
 
 struct OutputSpec {
-  int every = 10;               // write a frame every N steps (0: final only)
+  int every = 1000;             // write a frame every N steps (0: final only)
   bool picture = true;          // drape.png of the final state
   int checkpoint_every = 0;     // checkpoint.h5 every N steps and at the end (0: only on a signal or the wall limit)
 };
