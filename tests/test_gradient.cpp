@@ -60,8 +60,8 @@ World random_world(unsigned seed, bool amrc = false) {
   for (int64_t k = L.moment(); k < L.shear(); ++k) w.cloth.z[k] = 2e-3 * u(rng);
   for (int64_t k = L.shear(); k < L.size(); ++k) w.cloth.z[k] = 3.0 * u(rng);
   // The step's history forces: near the current ones, as during a minimisation.
-  for (int64_t k = L.tension(); k < L.size(); ++k)
-    w.cloth.anchor[k - L.tension()] = w.cloth.z[k] * (1 + 0.05 * u(rng));
+  std::vector<double> f1(w.cloth.z.size(), 0.0);  // laid out as z
+  for (int64_t k = L.tension(); k < L.size(); ++k) f1[k] = w.cloth.z[k] * (1 + 0.05 * u(rng));
   w.model.dt = 2e-3;
   w.model.dt_prev = 1.5e-3;
   w.model.drag = 4.0;  // air drag in the Newton term
@@ -71,7 +71,7 @@ World random_world(unsigned seed, bool amrc = false) {
   EXPECT_GT(w.model.bend[0].reversal(), 1.0);
   EXPECT_GT(w.model.stretch[1].reversal(), 1.0);
   EXPECT_GT(w.model.shear.reversal(), 1.0);
-  w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), w.cloth.anchor.data());
+  w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), f1.data(), w.cloth.anchor.data());
   return w;
 }
 

@@ -56,11 +56,11 @@ class Evaluator {
   // the positions in z: there the band and memory costs vanish and the cost
   // is the Newton term alone, a function of the positions.
   void hysteresis_forces(double* z);
-  // At a step's start: turns the step-start forces in `anchor` (laid out as
-  // Cloth::anchor) into Band::anchor values, with the strains at positions x1
-  // (whose ghost and hanging entries must be current). Nothing to do when
-  // every band's reversal is 0.
-  void hysteresis_anchors(const double* x1, double* anchor);
+  // At a step's start: turns the step-start forces (z's force slots) into
+  // Band::anchor values in `anchor` (laid out as Cloth::anchor, from the
+  // tension block on), with the strains at positions x1 (whose ghost and
+  // hanging entries must be current) and the ring's forces in z current.
+  void hysteresis_anchors(const double* x1, const double* z, double* anchor);
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are

@@ -57,20 +57,24 @@ void Evaluator::hysteresis_forces(double* z) {
   });
 }
 
-void Evaluator::hysteresis_anchors(const double* x1, double* a) {
-  if (m_.stretch[0].reversal() == 0 && m_.stretch[1].reversal() == 0 && m_.bend[0].reversal() == 0 &&
-      m_.bend[1].reversal() == 0 && m_.shear.reversal() == 0)
-    return;
+void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a) {
+  // Each element's step-start force f1 (z's force slots) folded into its
+  // anchor; only the active elements and the ring's, the ones that read it.
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  for_edges([&](int64_t s) { a[s] = m_.stretch[s & 1].anchor(a[s], edge_strain(c_, x1, s)); });
+  for_edges([&](int64_t s) {
+    const Band& b = m_.stretch[s & 1];
+    a[s] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain(c_, x1, s)) : z[fo + s];
+  });
   for_triples([&](int64_t s) {
-    double& f = a[L.moment() - fo + s];
-    f = m_.bend[s & 1].anchor(f, triple_curvature(c_, x1, s));
+    const Band& b = m_.bend[s & 1];
+    const int64_t k = L.moment() - fo + s;
+    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature(c_, x1, s)) : z[fo + k];
   });
   for_shears([&](int64_t s) {
-    double& f = a[L.shear() - fo + s];
-    f = m_.shear.anchor(f, shear_strain(c_, x1, s));
+    const Band& b = m_.shear;
+    const int64_t k = L.shear() - fo + s;
+    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain(c_, x1, s)) : z[fo + k];
   });
 }
 

@@ -6,6 +6,7 @@
 
 #include "io/error.hpp"
 #include "solver/kernels.hpp"
+#include "solver/loops.hpp"
 
 namespace drape {
 
@@ -48,6 +49,22 @@ void TimeLoop::freeze_bend_axes() {
     if (c_.triple_on[2 * p]) store3(axis(weft, warp), &c_.bend_axis[6 * p]);
     if (c_.triple_on[2 * p + 1]) store3(-1.0 * axis(warp, weft), &c_.bend_axis[6 * p + 3]);
   }
+}
+
+// Only the unknowns: ghosts, hanging particles and the ring's forces, which
+// CG also writes, are recomputed from them before they are read again, and
+// a pass over the whole finest-grid array would cost a coarse mesh more than
+// its step (64 MB at 1000 x 1000).
+void TimeLoop::save_unknowns() {
+  const double* z = c_.z.data();
+  double* s = z_saved_.data();
+  for_each_listed(lists_.unknown_spans, [&](int64_t k) { s[k] = z[k]; });
+}
+
+void TimeLoop::restore_unknowns() {
+  double* z = c_.z.data();
+  const double* s = z_saved_.data();
+  for_each_listed(lists_.unknown_spans, [&](int64_t k) { z[k] = s[k]; });
 }
 
 void TimeLoop::refresh_ghosts(bool history) {
@@ -176,12 +193,11 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   StepStats st;
   st.step = c_.step + 1;
   const double dt_start = c_.dt, first_step = cg_.first_step();
-  std::copy(c_.z.begin(), c_.z.end(), z_saved_.begin());
-  std::copy(c_.z.begin() + c_.layout.tension(), c_.z.end(), c_.anchor.begin());
+  save_unknowns();
   halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
   ev_.interpolate_hanging(c_.x1.data());           // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();
-  ev_.hysteresis_anchors(c_.x1.data(), c_.anchor.data());
+  ev_.hysteresis_anchors(c_.x1.data(), c_.z.data(), c_.anchor.data());
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;
   cs.tolerance = spec_.tolerance;
@@ -208,12 +224,12 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
     check_finite(st);
     if (r.converged || r.stopped || c_.dt <= spec_.dt_min * (1 + 1e-12) || st.retries >= 8) break;
     // Not converged: the step was too long for the stiff cost. Retry shorter.
-    std::copy(z_saved_.begin(), z_saved_.end(), c_.z.begin());
+    restore_unknowns();
     c_.dt = std::max(spec_.dt_min, 0.5 * c_.dt);
     ++st.retries;
   }
   if (r.stopped) {  // back to the end of the previous step: a clean state to save
-    std::copy(z_saved_.begin(), z_saved_.end(), c_.z.begin());
+    restore_unknowns();
     c_.dt = dt_start;
     cg_.set_first_step(first_step);
     st.stopped = true;

@@ -58,6 +58,8 @@ class TimeLoop {
   void stop_at_margin(int64_t p);
   void stop_all_at_margin();
   double margin_overshoot() const;
+  void save_unknowns();
+  void restore_unknowns();
   void accept(StepStats& st);
   void check_finite(const StepStats& st) const;
 
