@@ -1,6 +1,9 @@
 #include "amrc/sequence.hpp"
 
 #include <algorithm>
+#include <cmath>
+
+#include "amrc/active_lists.hpp"
 
 namespace drape {
 
@@ -10,6 +13,65 @@ int sequence_start_level(const Grid& g, double spacing) {
   int level = 0;
   while (level < 10 && h * double(2 << level) <= spacing && (intervals >> (level + 1)) >= 8) ++level;
   return level;
+}
+
+}  // namespace drape
+
+namespace drape {
+
+namespace {
+
+// Eased edges keep this much strain: the tension of a cloth hanging under
+// its weight (a fraction of that) stays as it was.
+constexpr double kEasedStrain = 0.01;
+
+// The edge's rest length in the material: its span on the finest grid.
+double material_rest(const Cloth& c, int64_t s) {
+  const int d = int(s & 1);
+  const int64_t p = s >> 1;
+  return double(c.next[d][p] - p) / double(c.grid.stride(d)) * c.grid.h(d);
+}
+
+double length(const Cloth& c, int64_t s) {
+  const double* x = c.x();
+  const int64_t a = s >> 1, b = c.next[s & 1][a];
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) d2 += (x[3 * b + k] - x[3 * a + k]) * (x[3 * b + k] - x[3 * a + k]);
+  return std::sqrt(d2);
+}
+
+template <class F>
+void for_both(const ActiveList& edges, const ActiveList& ring, F&& f) {
+  for (const ActiveList* l : {&edges, &ring}) {
+    const int64_t n = l->size();
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) f(l->items[k]);
+  }
+}
+
+}  // namespace
+
+double ease_stretched_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges) {
+  double worst = 0;
+  for (const ActiveList* l : {&edges, &ring_edges}) {
+    const int64_t n = l->size();
+#pragma omp parallel for schedule(static) reduction(max : worst)
+    for (int64_t k = 0; k < n; ++k) {
+      const int64_t s = l->items[k];
+      const double rest = material_rest(c, s), len = length(c, s);
+      c.edge_rest[s] = std::max(rest, len / (1 + kEasedStrain));
+      worst = std::max(worst, len / rest - 1);
+    }
+  }
+  return worst;
+}
+
+void relax_eased_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges, double rate,
+                       double dt) {
+  for_both(edges, ring_edges, [&](int64_t s) {
+    const double rest = material_rest(c, s);
+    c.edge_rest[s] = std::max(rest, c.edge_rest[s] - rate * dt * rest);
+  });
 }
 
 }  // namespace drape

@@ -2,8 +2,9 @@
 // Grid sequencing: the drape found on coarser meshes first. The run starts
 // with every quadtree leaf at one coarse level; each time the cloth comes to
 // rest, every leaf splits (Amrc::set_uniform_level), and the finer mesh starts
-// from the coarser one's rest state, its tensions and moments included. Only
-// the finest mesh's rest ends the run. A coarse mesh crosses the long,
+// from the coarser one's rest state, its tensions and moments included. The
+// finest mesh's rest ends the run, or a coarser one's when the wall budget
+// left (solver.wall_limit) would not cover the next finer mesh. A coarse mesh crosses the long,
 // slow part of the drape (the fall, the swing of the sides) at a coarse
 // mesh's price; each finer one only has to settle what it resolves anew.
 #include "solver/cloth.hpp"
@@ -14,5 +15,24 @@ namespace drape {
 // `spacing` (m), and coarse enough to keep at least 8 intervals per side;
 // 0 (start on the finest mesh) when spacing is 0 or below the grid's.
 int sequence_start_level(const Grid& g, double spacing);
+
+}  // namespace drape
+
+namespace drape {
+
+struct ActiveList;
+
+// A split's new particle on a coarse edge that crossed an obstacle's rim
+// is lifted out of the obstacle, and its two new edges come out stretched
+// (a quarter longer at a box edge: the chord cut the corner, the cloth must
+// go round it); released at once, they fling the cloth (12 m/s seen). So
+// the split eases them: each edge stretched beyond 1 % gets a rest length
+// that leaves it 1 %, which shrinks back to the material's at `rate` (strain per
+// second). Returns the largest strain eased on this rank's edges.
+constexpr double kEaseRate = 2.0;  // strain per second
+double ease_stretched_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges);
+// One step of dt: rest lengths move rate * dt (strain) back towards the material's.
+void relax_eased_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges, double rate,
+                       double dt);
 
 }  // namespace drape

@@ -67,6 +67,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
         .value("particles", (long long)g.particles)
         .end_object();
   j.end_array();
+  j.value("final_level", s.final_level);
+  j.value("sequence_cut_short", s.sequence_cut_short);
   j.begin_array("grid").value(nullptr, cloth.grid.ni).value(nullptr, cloth.grid.nj).end_array();
   j.value("free_particles", (long long)free_particles);
   const RunCounters& n = s.counters;

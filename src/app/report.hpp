@@ -50,6 +50,8 @@ struct Summary {
     int64_t particles;
   };
   std::vector<Stage> stages;
+  int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)
+  bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
 };
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);

@@ -105,6 +105,16 @@ void add_step(RunCounters& n, const StepStats& st) {
   n.dt_max = std::max(n.dt_max, st.dt);
 }
 
+// Grid sequencing: every mesh runs with the stage drag (the meshes only lead
+// to the rest state, which drag does not change, and the finest one must
+// settle too), and a coarse mesh's residual forces are measured in its own
+// particles' weight (4^level finest ones), so that a step converges to the
+// same relative accuracy on every mesh. Without it, the scene's physics.
+void stage_physics(Model& m, const Scene& scene, double finest_force_scale, bool sequencing, int level) {
+  m.drag = sequencing ? std::max(scene.solver.drag, scene.amrc.stage_drag) : scene.solver.drag;
+  m.force_scale = finest_force_scale * std::ldexp(1.0, 2 * level);
+}
+
 }  // namespace
 
 int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm) {
@@ -128,6 +138,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   Decomposition dec;
   std::unique_ptr<Amrc> amrc;
   int sequence_level = 0;  // grid sequencing: the uniform mesh's level now (0: finest, or off)
+  double finest_force_scale = 0;
+  bool sequencing = false;  // the run started on a coarser mesh (or its checkpoint was on one)
   Summary sum;
   int last_frame = -1;  // the step of the last frame written (-1: none yet)
   {
@@ -154,7 +166,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       amrc->apply(cloth, fabric.density, scene.cloth.shear);
     }
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
-    if (sequence_level > 0) model.drag = std::max(scene.solver.drag, scene.amrc.stage_drag);
+    finest_force_scale = model.force_scale;
+    sequencing = amrc && !scene.amrc.enabled;
+    stage_physics(model, scene, finest_force_scale, sequencing, sequence_level);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
     // refuses more ranks than tiles
     dec = decompose(cloth, tiling, comm,
@@ -284,18 +298,39 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     if (a.refined != 0 || a.coarsened != 0) mesh_changed();
   };
   // Grid sequencing: the cloth at rest on a coarse mesh goes on on the next finer one.
+  double ease_until = 0;  // stretched edges eased by the last split relax until this time
   auto refine_everywhere = [&] {
     {
       ScopedPhase ph(tm, kAmrc);
       loop.refresh_ghosts(true);
       amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level);
     }
-    if (sequence_level == 0) model.drag = scene.solver.drag;  // the finest mesh: the scene's physics
+    stage_physics(model, scene, finest_force_scale, sequencing, sequence_level);
     mesh_changed();
+    const double eased = red.max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
+    ease_until = cloth.time + eased / kEaseRate;
     sum.stages.push_back({cloth.step, cloth.time, sequence_level, sum.active_final});
     if (talk)
-      std::printf("at rest after step %d (t = %.4g s): every leaf split, level %d now, %lld particles\n",
-                  cloth.step, cloth.time, sequence_level, (long long)sum.active_final);
+      std::printf("at rest after step %d (t = %.4g s): every leaf split, level %d now, %lld particles; "
+                  "edges eased from up to %.1f %% strain\n",
+                  cloth.step, cloth.time, sequence_level, (long long)sum.active_final, 100 * eased);
+  };
+  // A finer mesh costs at least 4 times this one (4 times the particles):
+  // when the wall budget left would not cover that, the run ends here, at
+  // rest on this mesh, rather than out of time on the next one mid-motion.
+  auto stage_start = std::chrono::steady_clock::now();
+  auto finer_mesh_fits = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    const double stage = std::chrono::duration<double>(now - stage_start).count();
+    const double left = scene.solver.wall_limit - std::chrono::duration<double>(now - t0).count();
+    const bool fits = root_decides(comm, scene.solver.wall_limit <= 0 || 4 * stage < left);
+    if (fits) stage_start = now;
+    else if (talk)
+      std::printf("at rest after step %d (t = %.4g s) on level %d: the next finer mesh would take about %.0f s "
+                  "of the %.0f s left (solver.wall_limit): ending here\n",
+                  cloth.step, cloth.time, sequence_level, 4 * stage, left);
+    sum.sequence_cut_short = !fits;
+    return fits;
   };
   const LoopClock clock0 = loop_clock();
   const auto stepping0 = std::chrono::steady_clock::now();
@@ -305,13 +340,15 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     if (st.stopped) break;
     add_step(sum.counters, st);
     sum.last = st;
+    const bool easing = cloth.time < ease_until;
+    if (easing) relax_eased_edges(cloth, lists.edges, lists.ring_edges, kEaseRate, st.dt);
     progress.step(st);
     const bool reached = scene.solver.end_time > 0 && cloth.time >= scene.solver.end_time;
     const bool last = st.step == scene.solver.steps || reached;
-    sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed)
+    sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed && !easing)
                             ? sum.counters.calm + 1 : 0;
     sum.at_rest = sum.counters.calm >= 3;
-    if (sum.at_rest && sequence_level > 0 && !last) {
+    if (sum.at_rest && sequence_level > 0 && !last && finer_mesh_fits()) {
       refine_everywhere();
       sum.counters.calm = 0;
       sum.at_rest = false;
@@ -326,6 +363,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     if (sum.at_rest || reached || stop_now()) break;
   }
   sum.signal = stop_code / 2;
+  sum.final_level = sequence_level;
   sum.stopped_by_wall_limit = stop_code == 1;
   // A stopped run always leaves a checkpoint to continue from; a finished
   // one does when checkpoints were asked for.

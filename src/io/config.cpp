@@ -730,7 +730,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "every", std::to_string(a.every), "steps between adaptations");
   line(os, "start_spacing", format_double(a.start_spacing),
        "m: without adaptation, start this coarse and refine at each rest (0: finest)");
-  line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on the meshes before the finest");
+  line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on every mesh while grid sequencing");
   return os.str();
 }
 
