@@ -11,7 +11,11 @@ drape=$1 mpiexec=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
 sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
-sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2)
+# A cloth let down onto the floor just inside the contact layer: at rest on
+# its coarse mesh after a few steps, then split (the drape over the box would
+# take thousands of steps to rest).
+sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
+          --set 'obstacle.shape="none"' --set cloth.height=0.016)
 for method in newton cg amrc sequence; do
   args=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
         --set solver.steps=40 --set output.every=10 --quiet)
@@ -43,7 +47,7 @@ for method in newton cg amrc sequence; do
   if [[ $method == sequence ]]; then
     stages=$(python3 -c 'import json,sys; print(" ".join("%d@%d" % (g["level"], g["from_step"]) for g in json.load(open(sys.argv[1]))["stages"]))' \
              "$work/$method-1/report.json")
-    [[ $stages == "1@0 0@3" ]] || { echo "sequence: stages $stages, expected level 1 from step 0, level 0 from step 3"; exit 1; }
+    [[ $stages == "1@0 0@10" ]] || { echo "sequence: stages $stages, expected level 1 from step 0, level 0 from step 10"; exit 1; }
     echo "sequence: stages $stages"
   fi
 done

@@ -339,6 +339,33 @@ TEST(GridSequence, StartLevelFromTheSpacing) {
   EXPECT_EQ(level(17, 1.0, 10.0), 1);    // 16 intervals: 8 per side at level 1, no further
 }
 
+
+// A split's stretched edges: eased to 1 % strain, the others untouched, and
+// back at the material's rest length after strain / rate seconds, no sooner.
+TEST(GridSequence, StretchedEdgesEaseBackToTheirRestLength) {
+  Scene s = flat_scene(9, 9, 0.08, 0.08);  // h = 1 cm
+  World w(s, test_fabric());
+  Cloth& c = w.cloth;
+  const double h = c.grid.hi;
+  const int64_t p = c.grid.id(4, 4);
+  c.z[3 * p + 2] += 0.75 * h;  // its four edges: sqrt(1 + 0.75^2) = 1.25, 25 % strain
+  const double worst = ease_stretched_edges(c, w.lists.edges, w.lists.ring_edges);
+  EXPECT_NEAR(worst, 0.25, 1e-12);
+  const int64_t left = 2 * c.grid.id(3, 4), right = 2 * p, far = 2 * c.grid.id(0, 0);
+  for (int64_t e : {left, right}) EXPECT_NEAR(c.edge_rest[e], 1.25 * h / 1.01, 1e-12) << "edge " << e;
+  EXPECT_DOUBLE_EQ(c.edge_rest[far], h);
+  const double rate = 2.0, dt = 1e-3;
+  int steps = 0;
+  while (c.edge_rest[right] > h && steps < 1000) {
+    relax_eased_edges(c, w.lists.edges, w.lists.ring_edges, rate, dt);
+    ++steps;
+  }
+  EXPECT_DOUBLE_EQ(c.edge_rest[right], h);
+  EXPECT_DOUBLE_EQ(c.edge_rest[left], h);
+  EXPECT_EQ(steps, int(std::ceil((1.25 / 1.01 - 1) / (rate * dt) - 1e-9)));
+  EXPECT_DOUBLE_EQ(c.edge_rest[far], h);
+}
+
 // Uniform levels keep the finest mesh's mass, and every finer mesh starts on
 // the coarser one's surface with its forces: an affine cloth stays affine,
 // a uniform tension stays uniform, through levels 2, 1 and 0.

@@ -347,7 +347,12 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     const bool last = st.step == scene.solver.steps || reached;
     sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed && !easing)
                             ? sum.counters.calm + 1 : 0;
-    sum.at_rest = sum.counters.calm >= 3;
+    // Three calm steps, spanning at least the time a cloth let go from rest
+    // takes to pass rest_speed twice over: the top of a fall is not rest.
+    const double g = std::sqrt(model.gravity[0] * model.gravity[0] + model.gravity[1] * model.gravity[1] +
+                               model.gravity[2] * model.gravity[2]);
+    const double calm_span = g > 0 ? 2 * scene.solver.rest_speed / (g * st.dt) : 0;
+    sum.at_rest = sum.counters.calm >= std::max(3.0, std::ceil(calm_span));
     if (sum.at_rest && sequence_level > 0 && !last && finer_mesh_fits()) {
       refine_everywhere();
       sum.counters.calm = 0;
