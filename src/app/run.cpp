@@ -332,6 +332,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.sequence_cut_short = !fits;
     return fits;
   };
+  const double g = std::sqrt(model.gravity[0] * model.gravity[0] + model.gravity[1] * model.gravity[1] +
+                             model.gravity[2] * model.gravity[2]);
   const LoopClock clock0 = loop_clock();
   const auto stepping0 = std::chrono::steady_clock::now();
   while (cloth.step < scene.solver.steps) {
@@ -349,8 +351,6 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                             ? sum.counters.calm + 1 : 0;
     // Three calm steps, spanning at least the time a cloth let go from rest
     // takes to pass rest_speed twice over: the top of a fall is not rest.
-    const double g = std::sqrt(model.gravity[0] * model.gravity[0] + model.gravity[1] * model.gravity[1] +
-                               model.gravity[2] * model.gravity[2]);
     const double calm_span = g > 0 ? 2 * scene.solver.rest_speed / (g * st.dt) : 0;
     sum.at_rest = sum.counters.calm >= std::max(3.0, std::ceil(calm_span));
     if (sum.at_rest && sequence_level > 0 && !last && finer_mesh_fits()) {
