@@ -15,10 +15,6 @@ int sequence_start_level(const Grid& g, double spacing) {
   return level;
 }
 
-}  // namespace drape
-
-namespace drape {
-
 namespace {
 
 // Eased edges keep this much strain: the tension of a cloth hanging under

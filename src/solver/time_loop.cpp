@@ -21,7 +21,6 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
 }
 
 void TimeLoop::freeze_bend_axes() {
-  const Grid& g = c_.grid;
   const double* x1 = c_.x1.data();
   auto tangent = [&](int64_t p, int d) {
     const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
@@ -39,22 +38,22 @@ void TimeLoop::freeze_bend_axes() {
     const double len = std::sqrt(dot(a, a));
     return len > 1e-3 ? (1.0 / len) * a : other;
   };
-  const int64_t n = g.n();
+  // Over the active triples and the ring's, the ones that read an axis (not
+  // the whole grid: a coarse mesh's step would pay for every finest particle).
+  for (const ActiveList* l : {&lists_.triples, &lists_.ring_triples}) {
+    const int64_t n = l->size();
 #pragma omp parallel for schedule(static)
-  for (int64_t p = 0; p < n; ++p) {
-    // A warp triple bends about the weft tangent, a weft triple about minus
-    // the warp tangent: both then count bending towards -normal as positive.
-    if (!c_.triple_on[2 * p] && !c_.triple_on[2 * p + 1]) continue;
-    const V3<double> warp = tangent(p, 0), weft = tangent(p, 1);
-    if (c_.triple_on[2 * p]) store3(axis(weft, warp), &c_.bend_axis[6 * p]);
-    if (c_.triple_on[2 * p + 1]) store3(-1.0 * axis(warp, weft), &c_.bend_axis[6 * p + 3]);
+    for (int64_t k = 0; k < n; ++k) {
+      // A warp triple bends about the weft tangent, a weft triple about minus
+      // the warp tangent: both then count bending towards -normal as positive.
+      const int64_t s = l->items[k], p = s >> 1;
+      const V3<double> warp = tangent(p, 0), weft = tangent(p, 1);
+      if ((s & 1) == 0) store3(axis(weft, warp), &c_.bend_axis[3 * s]);
+      else store3(-1.0 * axis(warp, weft), &c_.bend_axis[3 * s]);
+    }
   }
 }
 
-// Only the unknowns: ghosts, hanging particles and the ring's forces, which
-// CG also writes, are recomputed from them before they are read again, and
-// a pass over the whole finest-grid array would cost a coarse mesh more than
-// its step (64 MB at 1000 x 1000).
 void TimeLoop::save_unknowns() {
   const double* z = c_.z.data();
   double* s = z_saved_.data();
