@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "amrc/criterion.hpp"
 #include "solver/checksum.hpp"
 #include "world.hpp"
 
@@ -98,6 +99,43 @@ TEST(ActiveLists, EveryItemProcessedExactlyOnce) {
         ASSERT_EQ(total, n);
       }
     }
+  }
+}
+
+// Newton's vectors run over position_spans: exactly the free particles'
+// positions, in ascending order, and the whole of unknown_spans below the
+// tension block; on a plain mesh and on an AMRC mesh with coarse leaves,
+// hanging particles and a clamped corner.
+TEST(ActiveLists, PositionSpansAreTheFreeParticlesPositions) {
+  for (bool amrc : {false, true}) {
+    Scene s;
+    s.cloth.particles = {23, 19};
+    s.cloth.size = {0.3, 0.25};
+    s.cloth.tile = 5;
+    World w(s, test_fabric());
+    if (amrc) {
+      Quadtree t(23, 19, 2);
+      const std::vector<double> flat(23 * 19, 0.0);
+      for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
+      t.refine(t.leaf_at(9, 5));
+      w.tree = t;
+    }
+    w.cloth.flags[0] |= kFixed;
+    w.rebuild();
+    const int64_t end = w.cloth.layout.tension();
+    std::vector<int64_t> want, got, below;
+    for (int64_t p : w.lists.particles.items)
+      for (int a = 0; a < 3; ++a) want.push_back(3 * p + a);
+    std::sort(want.begin(), want.end());
+    const IndexRuns& x = w.lists.position_spans;
+    for (int64_t r = 0; r < x.count(); ++r)
+      for (int64_t k = x.bounds[2 * r]; k < x.bounds[2 * r + 1]; ++k) got.push_back(k);
+    const IndexRuns& u = w.lists.unknown_spans;
+    for (int64_t r = 0; r < u.count(); ++r)
+      for (int64_t k = u.bounds[2 * r]; k < std::min(end, u.bounds[2 * r + 1]); ++k) below.push_back(k);
+    ASSERT_LT(want.size(), 3 * size_t(w.cloth.grid.n()) - (amrc ? 100 : 2)) << "some particles are not free";
+    EXPECT_EQ(got, want) << (amrc ? "AMRC mesh" : "plain mesh");
+    EXPECT_EQ(below, want) << (amrc ? "AMRC mesh" : "plain mesh");
   }
 }
 

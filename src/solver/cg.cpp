@@ -14,15 +14,15 @@ Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling&
   partials_.assign(tiling.count(), 0.0);
 }
 
-double Minimizer::dot(const double* a, const double* b) {
+double Minimizer::dot(const double* a, const double* b, int64_t end) {
   const IndexRuns& u = lists_.unknowns;
   const int nt = int(lists_.tiles.size());
   timed_region([&] {
 #pragma omp for schedule(dynamic, 1) nowait
     for (int t = 0; t < nt; ++t) {
       double s = 0;
-      for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1]; ++r)
-        for (int64_t k = u.bounds[2 * r]; k < u.bounds[2 * r + 1]; ++k) s += a[k] * b[k];
+      for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1] && u.bounds[2 * r] < end; ++r)
+        for (int64_t k = u.bounds[2 * r]; k < std::min(end, u.bounds[2 * r + 1]); ++k) s += a[k] * b[k];
       partials_[t] = s;
     }
   });

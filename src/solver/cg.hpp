@@ -2,6 +2,7 @@
 // Nonlinear conjugate gradient (Polak-Ribiere+, diagonally scaled) with an
 // Armijo line search and restarts: the minimizer of the paper's Algorithm 1.
 // Dot products are summed per tile in a fixed order (DESIGN §3).
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -44,8 +45,10 @@ class Minimizer {
   double first_step() const { return alpha_; }
   void set_first_step(double a) { alpha_ = a; }
 
-  // Tile-ordered dot products (exposed for tests).
-  double dot(const double* a, const double* b);
+  // Tile-ordered dot products (exposed for tests), over the unknowns below
+  // `end` (a tile's runs come in z's block order: end = the tension block's
+  // start keeps the positions).
+  double dot(const double* a, const double* b, int64_t end = INT64_MAX);
 
  private:
   CostTerms eval(Evaluator& ev, double* z, double* g, bool numeric);

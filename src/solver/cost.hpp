@@ -64,9 +64,11 @@ class Evaluator {
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
-  // left out so that K stays positive definite). x entries only; others 0.
+  // left out so that K stays positive definite). Written at the free
+  // particles' positions (hanging ones': 0) only, the entries Newton's
+  // vectors live on (ActiveLists::position_spans).
   void stiffness_product(const double* z, double* v, double* kv);
-  // Its diagonal (per position unknown; 1 elsewhere).
+  // Its diagonal, at the same entries.
   void stiffness_diagonal(const double* z, double* diag);
 
   // Per-slot bending cost of the last evaluate() (the AMRC criterion).

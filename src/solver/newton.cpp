@@ -10,12 +10,17 @@ NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots) : c_(cloth), dot
   for (auto* v : {&b_, &d_, &r_, &s_, &p_, &kp_, &diag_, &zt_}) v->assign(n, 0.0);
 }
 
-// Jacobi-preconditioned CG for K d = b (b_ holds the right-hand side).
+// Jacobi-preconditioned CG for K d = b (b_ holds the right-hand side). Every
+// vector lives on the free particles' positions (position_spans; dots up to
+// the tension block): the force slots are not Newton's unknowns, and on a
+// coarse mesh they are 5/8 of the entries.
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
   double *b = b_.data(), *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(),
          *kp = kp_.data(), *diag = diag_.data();
+  const IndexRuns& x = ev.lists().position_spans;
+  const int64_t end = c_.layout.tension();
   {
     ScopedPhase ph(tm, kScaling);
     ev.stiffness_diagonal(z, diag);
@@ -23,14 +28,14 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) {
+    for_each_listed(x, [&](int64_t k) {
       d[k] = 0;
       r[k] = b[k];
       s[k] = r[k] / diag[k];
       p[k] = s[k];
     });
-    target = rel_tol * rel_tol * dots_.dot(b, b);
-    rs = dots_.dot(r, s);
+    target = rel_tol * rel_tol * dots_.dot(b, b, end);
+    rs = dots_.dot(r, s, end);
   }
   int it = 0;
   while (it < budget) {
@@ -39,20 +44,20 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
       ev.stiffness_product(z, p, kp);
     }
     ScopedPhase ph(tm, kVector);
-    const double pkp = dots_.dot(p, kp);
+    const double pkp = dots_.dot(p, kp, end);
     if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
     const double a = rs / pkp;
-    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) {
+    for_each_listed(x, [&](int64_t k) {
       d[k] += a * p[k];
       r[k] -= a * kp[k];
     });
     ++it;
-    if (dots_.dot(r, r) <= target) break;
-    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { s[k] = r[k] / diag[k]; });
-    const double rs_new = dots_.dot(r, s);
+    if (dots_.dot(r, r, end) <= target) break;
+    for_each_listed(x, [&](int64_t k) { s[k] = r[k] / diag[k]; });
+    const double rs_new = dots_.dot(r, s, end);
     const double beta = rs_new / rs;
     rs = rs_new;
-    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
+    for_each_listed(x, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
   }
   return it;
 }
@@ -68,7 +73,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   }
   res.evaluations = 1;
   double c0 = res.cost.total();
-  double* zt = zt_.data();  // the active unknowns before the line search's trials
+  double* zt = zt_.data();  // the free particles' positions before the line search's trials
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;
@@ -78,7 +83,6 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // d of K d = -rho is the position step divided by F0.
     const std::vector<double>& rho = ev.residual();
     const ActiveList& free = ev.lists().particles;
-    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { b_[k] = 0.0; });
     parallel_for(free.size(), [&](int64_t k) {
       for (int i = 0; i < 3; ++i) b_[3 * free.items[k] + i] = -rho[3 * free.items[k] + i];
     });
@@ -90,12 +94,13 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     const double scale = ev.force_scale();
     bool accepted = false;
     // Trials in place: each evaluation brings z's ghosts and hanging particles
-    // up to date, so only the active unknowns are saved and restored (a
-    // whole-array copy would cost the finest mesh's price on a coarse one).
-    for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { zt[k] = z[k]; });
+    // up to date and sets the element forces from the positions, so only the
+    // free particles' positions are saved and restored (a whole-array copy
+    // would cost the finest mesh's price on a coarse one).
+    for_each_listed(ev.lists().position_spans, [&](int64_t k) { zt[k] = z[k]; });
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
-      for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { z[k] = zt[k] + a * scale * d_[k]; });
+      for_each_listed(ev.lists().position_spans, [&](int64_t k) { z[k] = zt[k] + a * scale * d_[k]; });
       ev.hysteresis_forces(z);
       const CostTerms trial = ev.evaluate(z, nullptr);
       ++res.evaluations;
@@ -108,7 +113,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     }
     if (!accepted) {
       // Back to where the line search began; z's residual buffers with it.
-      for_each_listed(ev.lists().unknown_spans, [&](int64_t k) { z[k] = zt[k]; });
+      for_each_listed(ev.lists().position_spans, [&](int64_t k) { z[k] = zt[k]; });
       ev.hysteresis_forces(z);
       res.cost = ev.evaluate(z, nullptr);
       res.stalled = true;

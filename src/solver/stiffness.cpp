@@ -112,7 +112,6 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const double stiff = c_.shear_area[s] * slope * phi.d;
     for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], stiff * value_of(g[k]));
   });
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { kv[k] = 0.0; });  // the rest is never read
   const double ca = m_.inertia_coeff();
   for_each_item(lists_.particles, pol_, [&](int64_t p) {
     double fc[3], slope = 0;
@@ -152,7 +151,6 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: the diagonal of its stiffness block, in the
   // first entry of the particle's buffer slot, gathered below.
   for_edges([&](int64_t s) {
