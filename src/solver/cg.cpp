@@ -17,8 +17,10 @@ Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling&
 double Minimizer::dot(const double* a, const double* b, int64_t end) {
   const IndexRuns& u = lists_.unknowns;
   const int nt = int(lists_.tiles.size());
+  // Static: on a coarse mesh a tile holds a few unknowns, and handing out
+  // hundreds of tiles one by one cost more than the products themselves.
   timed_region([&] {
-#pragma omp for schedule(dynamic, 1) nowait
+#pragma omp for schedule(static) nowait
     for (int t = 0; t < nt; ++t) {
       double s = 0;
       for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1] && u.bounds[2 * r] < end; ++r)
