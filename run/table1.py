@@ -45,17 +45,19 @@ def main():
                 "particles_min": pa["min"], "particles_max": pa["max"],
                 "quality_error_cost": (r["final_cost"]["total"] - ref_cost) / ref_cost if ref_cost else 0.0,
                 "quality_error_geometric": rms, "max_penetration": r["max_penetration"],
-                "simulated_seconds": r["simulated_seconds"], "steps": r["steps"],
+                "simulated_seconds": r["simulated_seconds"], "steps": r["steps"], "at_rest": r["at_rest"],
             })
     json.dump({"rows": rows}, open(f"{out}/table1.json", "w"), indent=1)
-    print("%-5s %-9s %10s %8s %15s %12s %12s %12s" % ("size", "mesh", "grid", "wall [s]", "particles",
-                                                      "cost err", "geom err", "penetr. [m]"))
+    print("%-5s %-9s %10s %8s %8s %15s %12s %12s %12s" % ("size", "mesh", "grid", "wall [s]", "t [s]", "particles",
+                                                           "cost err", "geom err", "penetr. [m]"))
     for r in rows:
         parts = str(r["particles_min"]) if r["particles_min"] == r["particles_max"] else \
             "%d-%d" % (r["particles_min"], r["particles_max"])
-        print("%-5d %-9s %10s %8.1f %15s %+12.3f %12.4f %12.2g" % (
-            r["size"], r["mesh"], "%dx%d" % tuple(r["grid"]), r["wall_seconds"], parts,
+        print("%-5d %-9s %10s %8.1f %8.3f%s %15s %+12.3f %12.4f %12.2g" % (
+            r["size"], r["mesh"], "%dx%d" % tuple(r["grid"]), r["wall_seconds"], r["simulated_seconds"],
+            "*" if r["at_rest"] else " ", parts,
             r["quality_error_cost"], r["quality_error_geometric"], r["max_penetration"]))
+    print("(t: simulated seconds, * at rest)")
     for size in sorted({r["size"] for r in rows}):
         f, a, c = (next(r for r in rows if r["size"] == size and r["mesh"] == m)
                    for m in ("finest", "AMRC", "coarsest"))

@@ -11,25 +11,12 @@ Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling&
     : c_(cloth), lists_(lists), tiling_(tiling), red_(red) {
   const size_t n = cloth.layout.size();
   for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) v->assign(n, 0.0);
-  partials_.assign(tiling.count(), 0.0);
+  partials_.assign(2 * size_t(tiling.count()), 0.0);  // up to 2 sums at once
 }
 
 double Minimizer::dot(const double* a, const double* b, int64_t end) {
-  const IndexRuns& u = lists_.unknowns;
-  const int nt = int(lists_.tiles.size());
-  // Static: on a coarse mesh a tile holds a few unknowns, and handing out
-  // hundreds of tiles one by one cost more than the products themselves.
-  timed_region([&] {
-#pragma omp for schedule(static) nowait
-    for (int t = 0; t < nt; ++t) {
-      double s = 0;
-      for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1] && u.bounds[2 * r] < end; ++r)
-        for (int64_t k = u.bounds[2 * r]; k < std::min(end, u.bounds[2 * r + 1]); ++k) s += a[k] * b[k];
-      partials_[t] = s;
-    }
-  });
-  double out = 0;
-  red_.sum_tiles(lists_.tiles, partials_.data(), 1, &out);
+  double out;
+  tile_sums<1>(end, [&](int64_t k, double* acc) { acc[0] += a[k] * b[k]; }, &out);
   return out;
 }
 

@@ -2,6 +2,7 @@
 // Nonlinear conjugate gradient (Polak-Ribiere+, diagonally scaled) with an
 // Armijo line search and restarts: the minimizer of the paper's Algorithm 1.
 // Dot products are summed per tile in a fixed order (DESIGN §3).
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -49,6 +50,11 @@ class Minimizer {
   // `end` (a tile's runs come in z's block order: end = the tension block's
   // start keeps the positions).
   double dot(const double* a, const double* b, int64_t end = INT64_MAX);
+  // K such sums in one pass: f(k, acc) adds unknown k's terms to acc[0..K),
+  // and may update vectors element-wise on the way (one pass over memory and
+  // one parallel region instead of one per vector). Same tile order as dot.
+  template <int K, class F>
+  void tile_sums(int64_t end, F&& f, double* out);
 
  private:
   CostTerms eval(Evaluator& ev, double* z, double* g, bool numeric);
@@ -60,5 +66,23 @@ class Minimizer {
   std::vector<double> g_, gn_, s_, d_, zt_, diag_, partials_;
   double alpha_ = 1.0;  // first trial step, carried from one iteration to the next
 };
+
+template <int K, class F>
+void Minimizer::tile_sums(int64_t end, F&& f, double* out) {
+  const IndexRuns& u = lists_.unknowns;
+  const int nt = int(lists_.tiles.size());
+  // Static: on a coarse mesh a tile holds a few unknowns, and handing out
+  // hundreds of tiles one by one cost more than the products themselves.
+  timed_region([&] {
+#pragma omp for schedule(static) nowait
+    for (int t = 0; t < nt; ++t) {
+      double acc[K] = {};
+      for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1] && u.bounds[2 * r] < end; ++r)
+        for (int64_t k = u.bounds[2 * r]; k < std::min(end, u.bounds[2 * r + 1]); ++k) f(k, acc);
+      for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
+    }
+  });
+  red_.sum_tiles(lists_.tiles, partials_.data(), K, out);
+}
 
 }  // namespace drape

@@ -243,11 +243,9 @@ CostTerms Evaluator::reduce_costs() {
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
-  for_edges([&](int64_t s) { edge_forces(s, z); });
-  for_triples([&](int64_t s) { triple_forces(s, z); });
-  for_shears([&](int64_t s) { shear_forces(s, z); });
-  hanging_forces(z);
-  for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_residual(p, z); });
+  elements_then_particles([&](int64_t s) { edge_forces(s, z); }, [&](int64_t s) { triple_forces(s, z); },
+                          [&](int64_t s) { shear_forces(s, z); }, [&] { hanging_forces(z); },
+                          [&](int64_t p) { particle_residual(p, z); });
   clear_hanging(hres_);
   const CostTerms cost = reduce_costs();
   if (!grad) return cost;

@@ -83,11 +83,10 @@ int pass_kind() {
   return kind;
 }
 
-// The paper's active lists: one chunk of the list per thread (ListCuts), each
-// chunk timed so that the cuts follow the measured cost of this kind of pass,
-// then the list's tail in small pieces to whichever thread is free.
+// Which cuts a kind of pass (its body's type F) uses on a list; serial,
+// before the parallel region that runs the pass.
 template <class F>
-void for_each_chunk(const ActiveList& list, F&& f) {
+ListCuts& cuts_for(const ActiveList& list) {
   const int chunks = omp_get_max_threads();
   constexpr size_t kKinds = 32;  // more kinds of pass share the last cuts
   if (list.cuts.size() != kKinds) {  // all at once, so a late kind allocates nothing
@@ -96,12 +95,25 @@ void for_each_chunk(const ActiveList& list, F&& f) {
   }
   ListCuts& c = list.cuts[std::min(kKinds - 1, size_t(pass_kind<std::decay_t<F>>()))];
   if (!c.fits(list.size(), chunks)) c.reset(list.size(), chunks);
+  return c;
+}
+
+// One pass over a list, inside a parallel region that is already running
+// (work-sharing loops, no barrier at the end: a later pass that reads this
+// one's results needs one). With the paper's active lists: one chunk of the
+// list per thread, each timed so that the cuts follow the measured cost of
+// this kind of pass (c.rebalance() after the region), then the list's tail in
+// small pieces to whichever thread is free. Otherwise whole tiles, with
+// OpenMP's static, dynamic or guided schedule.
+template <class F>
+void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& f) {
   const int64_t* items = list.items.data();
-  const int64_t* cut = c.cut.data();
-  double* seconds = c.seconds.data();
-  const int64_t head = c.cut.back(), tail = c.n - head;
-  const int pieces = c.pieces;
-  timed_region([&] {
+  if (pol.schedule == Schedule::ActiveLists) {
+    const int chunks = int(c.cut.size()) - 1;
+    const int64_t* cut = c.cut.data();
+    double* seconds = c.seconds.data();
+    const int64_t head = c.cut.back(), tail = c.n - head;
+    const int pieces = c.pieces;
     // One chunk per thread; any other team size still covers every chunk.
 #pragma omp for schedule(static, 1) nowait
     for (int q = 0; q < chunks; ++q) {
@@ -113,41 +125,37 @@ void for_each_chunk(const ActiveList& list, F&& f) {
 #pragma omp for schedule(dynamic, 1) nowait
     for (int q = 0; q < pieces; ++q)
       for (int64_t k = head + tail * q / pieces; k < head + tail * (q + 1) / pieces; ++k) f(items[k]);
-  });
-  c.rebalance();
-}
-
-template <class F>
-void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
-  if (pol.schedule == Schedule::ActiveLists) {
-    for_each_chunk(list, f);
     return;
   }
   const int nt = int(list.tile_begin.size()) - 1;
-  const int64_t* items = list.items.data();
   const int64_t* tb = list.tile_begin.data();
-  const Schedule sc = pol.schedule;
   const int chunk = pol.chunk;
-  timed_region([&] {
-    switch (sc) {
-      case Schedule::ActiveLists:  // not reached: for_each_chunk above
-      case Schedule::Static:
+  switch (pol.schedule) {
+    case Schedule::ActiveLists:  // not reached: above
+    case Schedule::Static:
 #pragma omp for schedule(static) nowait
-        for (int t = 0; t < nt; ++t)
-          for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
-        break;
-      case Schedule::Dynamic:
+      for (int t = 0; t < nt; ++t)
+        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+      break;
+    case Schedule::Dynamic:
 #pragma omp for schedule(dynamic, chunk) nowait
-        for (int t = 0; t < nt; ++t)
-          for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
-        break;
-      case Schedule::Guided:
+      for (int t = 0; t < nt; ++t)
+        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+      break;
+    case Schedule::Guided:
 #pragma omp for schedule(guided) nowait
-        for (int t = 0; t < nt; ++t)
-          for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
-        break;
-    }
-  });
+      for (int t = 0; t < nt; ++t)
+        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+      break;
+  }
+}
+
+// One pass in a parallel region of its own.
+template <class F>
+void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
+  ListCuts& c = cuts_for<F>(list);
+  timed_region([&] { item_loops(list, pol, c, f); });
+  if (pol.schedule == Schedule::ActiveLists) c.rebalance();
 }
 
 // Per-tile sums of value(item) over each tile's run, in list order: the

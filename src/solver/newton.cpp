@@ -28,14 +28,17 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-    for_each_listed(x, [&](int64_t k) {
+    double sums[2];  // b.b, r.s
+    dots_.tile_sums<2>(end, [&](int64_t k, double* acc) {
       d[k] = 0;
       r[k] = b[k];
       s[k] = r[k] / diag[k];
       p[k] = s[k];
-    });
-    target = rel_tol * rel_tol * dots_.dot(b, b, end);
-    rs = dots_.dot(r, s, end);
+      acc[0] += b[k] * b[k];
+      acc[1] += r[k] * s[k];
+    }, sums);
+    target = rel_tol * rel_tol * sums[0];
+    rs = sums[1];
   }
   int it = 0;
   while (it < budget) {
@@ -47,16 +50,20 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     const double pkp = dots_.dot(p, kp, end);
     if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
     const double a = rs / pkp;
-    for_each_listed(x, [&](int64_t k) {
+    // One pass: the step, the residual, the preconditioned residual and the
+    // two dot products they feed (s is wasted on the last iteration only).
+    double sums[2];  // r.r, r.s
+    dots_.tile_sums<2>(end, [&](int64_t k, double* acc) {
       d[k] += a * p[k];
       r[k] -= a * kp[k];
-    });
+      s[k] = r[k] / diag[k];
+      acc[0] += r[k] * r[k];
+      acc[1] += r[k] * s[k];
+    }, sums);
     ++it;
-    if (dots_.dot(r, r, end) <= target) break;
-    for_each_listed(x, [&](int64_t k) { s[k] = r[k] / diag[k]; });
-    const double rs_new = dots_.dot(r, s, end);
-    const double beta = rs_new / rs;
-    rs = rs_new;
+    if (sums[0] <= target) break;
+    const double beta = sums[1] / rs;
+    rs = sums[1];
     for_each_listed(x, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
   }
   return it;

@@ -46,15 +46,14 @@ void Evaluator::hysteresis_forces(double* z) {
   interpolate_hanging(z);
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();  // anchors are indexed from the tension block
-  for_edges([&](int64_t s) {
-    z[L.tension() + s] = m_.stretch[s & 1].stop(c_.anchor[s], edge_strain(c_, z, s)).f;
-  });
-  for_triples([&](int64_t s) {
-    z[L.moment() + s] = m_.bend[s & 1].stop(c_.anchor[L.moment() - fo + s], triple_curvature(c_, z, s)).f;
-  });
-  for_shears([&](int64_t s) {
-    z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], shear_strain(c_, z, s)).f;
-  });
+  element_passes(
+      [&](int64_t s) { z[L.tension() + s] = m_.stretch[s & 1].stop(c_.anchor[s], edge_strain(c_, z, s)).f; },
+      [&](int64_t s) {
+        z[L.moment() + s] = m_.bend[s & 1].stop(c_.anchor[L.moment() - fo + s], triple_curvature(c_, z, s)).f;
+      },
+      [&](int64_t s) {
+        z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], shear_strain(c_, z, s)).f;
+      });
 }
 
 void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a) {
@@ -83,7 +82,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  for_edges([&](int64_t s) {
+  auto edge = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V3<Dual> g[2];
@@ -93,8 +92,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const double tension = std::max(0.0, st.f), stiff = st.df_dq / L0 * len.d;
     for (int k = 0; k < 2; ++k)
       put(&buf_e_[6 * s + 3 * k], w * (tension * deriv_of(g[k]) + stiff * value_of(g[k])));
-  });
-  for_triples([&](int64_t s) {
+  };
+  auto triple = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V3<Dual> g[3];
@@ -104,16 +103,16 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th.v / Lm).df_dq;
     const double stiff = w * slope / Lm * th.d;
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * value_of(g[k]));
-  });
-  for_shears([&](int64_t s) {
+  };
+  auto shear = [&](int64_t s) {
     V3<Dual> g[3];
     const Dual phi = shear_angle(at(z, v, s), at(z, v, c_.next[0][s]), at(z, v, c_.next[1][s]), g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi.v).df_dq;
     const double stiff = c_.shear_area[s] * slope * phi.d;
     for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], stiff * value_of(g[k]));
-  });
+  };
   const double ca = m_.inertia_coeff();
-  for_each_item(lists_.particles, pol_, [&](int64_t p) {
+  auto particle = [&](int64_t p) {
     double fc[3], slope = 0;
     const bool touching = contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     const double* vp = v + 3 * p;
@@ -132,7 +131,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       out[2] += c[2];
     });
     for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
-  });
+  };
+  elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends(kv, [&](int64_t h, double* out) {  // P^T K P: no mass at h
     double fc[3], slope = 0;
     const bool touching = contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
@@ -153,7 +153,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   const int64_t fo = L.tension();
   // Per element and particle: the diagonal of its stiffness block, in the
   // first entry of the particle's buffer slot, gathered below.
-  for_edges([&](int64_t s) {
+  auto edge = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[2];
@@ -162,8 +162,8 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len / L0 - 1);
     for (int k = 0; k < 2; ++k)
       buf_e_[6 * s + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
-  });
-  for_triples([&](int64_t s) {
+  };
+  auto triple = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[3];
@@ -172,21 +172,22 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
     const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / Lm).df_dq;
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
-  });
-  for_shears([&](int64_t s) {
+  };
+  auto shear = [&](int64_t s) {
     V g[3];
     const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
     for (int k = 0; k < 3; ++k) buf_s_[9 * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
-  });
+  };
   const double ca = m_.inertia_coeff();
-  for_each_item(lists_.particles, pol_, [&](int64_t p) {
+  auto particle = [&](int64_t p) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     double dsum = c_.mass[p] * ca + slope / 3;
     gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
-  });
+  };
+  elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends(diag, [&](int64_t h, double* out) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
