@@ -13,6 +13,13 @@ def final_positions(run):
         return np.array(f["frames"][last]["positions"])  # (NI, NJ, 3)
 
 
+def cloth_width(run):
+    """The flat cloth's extent along i, from the first frame (t = 0)."""
+    with h5py.File(f"{run}/drape.h5", "r") as f:
+        first = np.array(f["frames"][sorted(f["frames"].keys())[0]]["positions"])
+        return float(np.ptp(first[..., 0]))
+
+
 def on_grid(x, n):
     """Samples the surface x (m x m x 3) at the n x n grid's parameters (bilinear)."""
     m = x.shape[0]
@@ -34,7 +41,7 @@ def main():
         reports = {name: json.load(open(f"{path}/report.json")) for name, path, _ in runs}
         ref_x = final_positions(runs[0][1])
         ref_cost = reports["finest"]["final_cost"]["total"]
-        width = 1.0 * (reports["finest"].get("cloth_width", 1.0))
+        width = cloth_width(runs[0][1])
         for name, path, n in runs:
             r = reports[name]
             x = on_grid(final_positions(path), fine)

@@ -69,6 +69,7 @@ class Minimizer {
 
 template <int K, class F>
 void Minimizer::tile_sums(int64_t end, F&& f, double* out) {
+  static_assert(K >= 1 && K <= 2, "partials_ holds two sums per tile (Minimizer's constructor)");
   const IndexRuns& u = lists_.unknowns;
   const int nt = int(lists_.tiles.size());
   // Static: on a coarse mesh a tile holds a few unknowns, and handing out

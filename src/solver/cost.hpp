@@ -110,6 +110,8 @@ class Evaluator {
   // thread (serial work such as the hanging particles') and the particle
   // pass that gathers the elements' per-slot results: one fork and join
   // instead of up to seven (on a coarse mesh a pass is microseconds of work).
+  // `between` may run on any thread of the team: it must not call MPI (the
+  // library runs FUNNELED), throw, or contain OpenMP work-sharing.
   template <class FE, class FT, class FS>
   void element_passes(FE&& fe, FT&& ft, FS&& fs) {
     passes(fe, ft, fs, [] {}, static_cast<std::nullptr_t*>(nullptr));
@@ -178,7 +180,7 @@ void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
                        &cuts_for<FT>(lists_.triples), &cuts_for<FT>(lists_.ring_triples),
                        &cuts_for<FS>(lists_.shears),  &cuts_for<FS>(lists_.ring_shears), nullptr};
   if constexpr (!std::is_same_v<FP, std::nullptr_t>) cuts[6] = &cuts_for<FP>(lists_.particles);
-  timed_region([&] {
+  timed_region([&](RegionTime& rt) {
     item_loops(lists_.edges, pol_, *cuts[0], fe);
     if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe);
     item_loops(lists_.triples, pol_, *cuts[2], ft);
@@ -186,9 +188,15 @@ void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
     item_loops(lists_.shears, pol_, *cuts[4], fs);
     if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs);
     if constexpr (!std::is_same_v<FP, std::nullptr_t>) {
+      const double w0 = omp_get_wtime();
 #pragma omp barrier
 #pragma omp single
-      between();
+      {
+        const double s0 = omp_get_wtime();
+        between();
+        rt.serial = omp_get_wtime() - s0;
+      }
+      rt.idle += omp_get_wtime() - w0 - rt.serial;
       item_loops(lists_.particles, pol_, *cuts[6], *fp);
     }
   });

@@ -28,20 +28,33 @@ inline LoopClock& loop_clock() {
   return c;
 }
 
-// Runs body() inside one parallel region and books its time on loop_clock().
-// body must contain the work-sharing loop (with nowait).
+// What a region's body says of its own time, per thread: seconds it waited
+// inside the region (at a barrier, or while one thread ran serial work), and
+// seconds of serial work it ran for the team. Neither counts as busy; the
+// serial work counts as sequential time, as it did outside the region.
+struct RegionTime {
+  double idle = 0, serial = 0;
+};
+
+// Runs body() (or body(RegionTime&)) inside one parallel region and books
+// its time on loop_clock(). body must contain the work-sharing loops (nowait).
 template <class Body>
 void timed_region(Body&& body) {
   const double t0 = omp_get_wtime();
-  double busy = 0;
-#pragma omp parallel reduction(+ : busy)
+  double busy = 0, serial = 0;
+#pragma omp parallel reduction(+ : busy, serial)
   {
+    RegionTime rt;
     const double b0 = omp_get_wtime();
-    body();
-    busy += omp_get_wtime() - b0;
+    if constexpr (std::is_invocable_v<Body&, RegionTime&>)
+      body(rt);
+    else
+      body();
+    busy += omp_get_wtime() - b0 - rt.idle - rt.serial;
+    serial += rt.serial;
   }
   LoopClock& c = loop_clock();
-  c.wall += omp_get_wtime() - t0;
+  c.wall += omp_get_wtime() - t0 - serial;
   c.busy += busy;
 }
 
