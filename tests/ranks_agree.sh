@@ -4,7 +4,9 @@
 # same drape.h5 datasets, bit for bit, with either solver; and with AMRC on,
 # where the 2- and 4-rank runs must have rebalanced (tiles migrated) at
 # least once. The Newton case runs with the KES reversal and air drag on, so
-# the step-start anchors of the ring's elements read the ghosts too.
+# the step-start anchors of the ring's elements read the ghosts too. The
+# amrc_speed case adds amrc.coarsen_speed, whose speeds each rank computes
+# for its own particles only: it must hold back some merges.
 # Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
@@ -16,11 +18,12 @@ amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set so
 # take thousands of steps to rest).
 sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
           --set 'obstacle.shape="none"' --set cloth.height=0.016)
-for method in newton cg amrc sequence; do
+for method in newton cg amrc amrc_speed sequence; do
   args=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
         --set solver.steps=40 --set output.every=10 --quiet)
   case $method in
     amrc) args+=("${amrc[@]}") ;;
+    amrc_speed) args+=("${amrc[@]}" --set amrc.coarsen_speed=0.01) ;;
     sequence) args+=("${sequence[@]}") ;;
     *) args+=(--set solver.method=$method) ;;
   esac
@@ -44,6 +47,12 @@ for method in newton cg amrc sequence; do
     echo "$method: 1 and $n ranks agree: $one"
   done
   grep -q '"iterations": [1-9]' "$work/$method-1/report.json" || { echo "$method: no iterations ran"; exit 1; }
+  if [[ $method == amrc_speed ]]; then
+    merges() { python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["amrc"]["coarsened"])' "$1/report.json"; }
+    held=$(merges "$work/amrc_speed-1") free=$(merges "$work/amrc-1")
+    (( held < free )) || { echo "amrc_speed: $held merges, not fewer than $free without the speed condition"; exit 1; }
+    echo "amrc_speed: $held merges against $free without the speed condition"
+  fi
   if [[ $method == sequence ]]; then
     stages=$(python3 -c 'import json,sys; print(" ".join("%d@%d" % (g["level"], g["from_step"]) for g in json.load(open(sys.argv[1]))["stages"]))' \
              "$work/$method-1/report.json")

@@ -164,6 +164,36 @@ TEST(Criterion, FlatClothCoarsensToTheCoarsestLevel) {
   EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
 }
 
+// amrc.coarsen_speed: a flat cloth whose lower rows still move keeps the
+// finest mesh wherever a cell holds a moving particle, and coarsens the rest.
+TEST(Criterion, MovingParticlesKeepTheirCellsFine) {
+  Quadtree t(kNi, kNj, kMaxLevel);
+  const std::vector<double> flat(size_t(kNi) * kNj, 0.0);
+  const int moving_rows = 6;  // i < 6 moves at 1 m/s, the rest at 1 mm/s
+  std::vector<double> speed(flat.size(), 1e-3);
+  for (int i = 0; i < moving_rows; ++i)
+    for (int j = 0; j < kNj; ++j) speed[size_t(i) * kNj + j] = 1.0;
+  std::vector<Cell> scratch;
+  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, 1.0, 0.5, scratch, &speed, 0.1);
+  ASSERT_TRUE(t.balanced());
+  std::vector<Cell> leaves;
+  t.leaves(leaves);
+  int coarse = 0;
+  for (const Cell& c : leaves) {
+    if (c.i < moving_rows) {
+      EXPECT_EQ(c.level, 0) << "leaf at " << c.i << "," << c.j << " holds moving particles";
+    }
+    coarse += c.level == kMaxLevel;
+  }
+  EXPECT_GT(coarse, 0) << "the still rows should coarsen to the coarsest level";
+  EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
+  // Once everything is slow, everything coarsens.
+  std::fill(speed.begin(), speed.end(), 1e-3);
+  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, 1.0, 0.5, scratch, &speed, 0.1);
+  t.leaves(leaves);
+  for (const Cell& c : leaves) EXPECT_EQ(c.level, kMaxLevel) << c.i << "," << c.j;
+}
+
 TEST(Criterion, SharpFoldRefinesToTheFinestLevel) {
   Quadtree t = coarsest();
   // A fold along the grid line i = 9: the cloth turns by 90 degrees there.

@@ -39,6 +39,7 @@ Corners corners_of(const Quadtree& t, int i, int j) {
 Amrc::Amrc(const Cloth& c, int max_level)
     : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
   indicator_.assign(c.grid.n(), 0.0);
+  speed_.assign(c.grid.n(), 0.0);
   cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
   was_active_.assign(c.grid.n(), 0);
   edge_on_ = c.edge_on;
@@ -46,18 +47,17 @@ Amrc::Amrc(const Cloth& c, int max_level)
   shear_on_ = c.shear_on;
 }
 
-void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
+namespace {
+
+// Runs at(p) on every particle of the rank's tiles (all of them on one
+// rank), then takes each particle's value from its owner.
+template <class At>
+void per_particle(const Cloth& c, const AdaptShare& share, std::vector<double>& out, At&& at) {
   const int64_t n = c.grid.n();
   out.assign(n, 0.0);
-  const double* x = c.x();
-  auto at = [&](int64_t p) {
-    for (int d = 0; d < 2; ++d)
-      if (c.triple_on[2 * p + d])
-        out[p] = std::max(out[p], turning_angle(x + 3 * c.prev[d][p], x + 3 * p, x + 3 * c.next[d][p]));
-  };
   if (!share.tiling) {
 #pragma omp parallel for schedule(static)
-    for (int64_t p = 0; p < n; ++p) at(p);
+    for (int64_t p = 0; p < n; ++p) out[p] = at(p);
     return;
   }
   const Tiling& tl = *share.tiling;
@@ -66,9 +66,32 @@ void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double
   for (size_t k = 0; k < tiles.size(); ++k) {
     const TileRange r = tl.range(tiles[k]);
     for (int i = r.i0; i < r.i1; ++i)
-      for (int j = r.j0; j < r.j1; ++j) at(int64_t(i) * tl.nj + j);
+      for (int j = r.j0; j < r.j1; ++j) out[int64_t(i) * tl.nj + j] = at(int64_t(i) * tl.nj + j);
   }
-  share.reducer->max_each(out.data(), n);  // each particle's value from its owner
+  share.reducer->max_each(out.data(), n);
+}
+
+}  // namespace
+
+void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
+  const double* x = c.x();
+  per_particle(c, share, out, [&](int64_t p) {
+    double m = 0;
+    for (int d = 0; d < 2; ++d)
+      if (c.triple_on[2 * p + d])
+        m = std::max(m, turning_angle(x + 3 * c.prev[d][p], x + 3 * p, x + 3 * c.next[d][p]));
+    return m;
+  });
+}
+
+void Amrc::speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
+  // x1 - x2 is the step the next prediction extrapolates (time_loop.cpp).
+  per_particle(c, share, out, [&](int64_t p) {
+    if (!c.active(p)) return 0.0;
+    double s = 0;
+    for (int k = 0; k < 3; ++k) s += (c.x1[3 * p + k] - c.x2[3 * p + k]) * (c.x1[3 * p + k] - c.x2[3 * p + k]);
+    return std::sqrt(s) / c.dt_prev;
+  });
 }
 
 void Amrc::apply(Cloth& c, double density, bool shear) const { apply_tree(tree_, c, density, shear); }
@@ -106,10 +129,12 @@ void Amrc::fill_inactive(Cloth& c) const {
 }
 
 AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
-                        const AdaptShare& share) {
+                        const AdaptShare& share, double coarsen_speed) {
   indicator(c, share, indicator_);
+  if (coarsen_speed > 0) speeds(c, share, speed_);
   old_ = tree_;
-  const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen, cells_);
+  const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen, cells_,
+                                     coarsen_speed > 0 ? &speed_ : nullptr, coarsen_speed);
   if (st.refined == 0 && st.coarsened == 0) return st;
   carry_over(c, density, shear);
   return st;

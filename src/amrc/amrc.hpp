@@ -36,13 +36,16 @@ class Amrc {
   // The criterion per particle: the largest turning angle (rad) of the mesh
   // lines through it, at its active triples; 0 elsewhere.
   void indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
+  // Each active particle's speed (m/s) as the next step starts; 0 elsewhere.
+  void speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
 
   // One adaptation of the tree to the cloth; when the mesh changes, carries
   // the state over and rebuilds the cloth's mesh (the caller rebuilds lists).
   // With several ranks each carries the state of its own particles (and of
   // its ghosts, which must be current, hanging ones included).
+  // coarsen_speed > 0: cells merge only where every particle is slower (m/s).
   AdaptStats adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
-                   const AdaptShare& share = {});
+                   const AdaptShare& share = {}, double coarsen_speed = 0);
 
   // Grid sequencing (sequence.hpp): every leaf at `level`, the state carried
   // over as adapt() does. Between runs of time steps, like adapt().
@@ -64,7 +67,7 @@ class Amrc {
   void carry_over(Cloth& c, double density, bool shear);
 
   Quadtree tree_, old_;
-  std::vector<double> indicator_;
+  std::vector<double> indicator_, speed_;
   std::vector<Cell> cells_;  // adapt's scratch, reserved for every leaf
   std::vector<uint8_t> was_active_, edge_on_, triple_on_, shear_on_;  // the old mesh's
 };

@@ -17,7 +17,7 @@ double largest(const Quadtree& t, const Cell& c, const std::vector<double>& indi
 }  // namespace
 
 AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen,
-                 std::vector<Cell>& snapshot) {
+                 std::vector<Cell>& snapshot, const std::vector<double>* speed, double coarsen_speed) {
   if (!(coarsen < refine)) throw std::invalid_argument("amrc: the coarsen threshold must be below refine");
   AdaptStats st;
   tree.leaves(snapshot);
@@ -34,7 +34,8 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double re
     const int l = c.level + 1;
     const Cell parent{(c.i >> l) << l, (c.j >> l) << l, l};
     if (parent.i != c.i || parent.j != c.j) continue;  // visit each parent once, from its first child
-    if (tree.can_coarsen(parent) && largest(tree, parent, indicator) < coarsen) {
+    if (tree.can_coarsen(parent) && largest(tree, parent, indicator) < coarsen &&
+        (!speed || largest(tree, parent, *speed) < coarsen_speed)) {
       tree.coarsen(parent);
       ++st.coarsened;
     }

@@ -17,8 +17,11 @@ struct AdaptStats {
 // all leaves with indicators below `coarsen` merges (2:1 balance permitting).
 // `indicator` has one value per particle (the run uses the bending cost).
 // `scratch` holds the leaves (reserve (NI-1)(NJ-1) to adapt without allocating).
+// With `speed` (one value per particle), a cell merges only where every
+// particle is also slower than `coarsen_speed`.
 AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen,
-                 std::vector<Cell>& scratch);
+                 std::vector<Cell>& scratch, const std::vector<double>* speed = nullptr,
+                 double coarsen_speed = 0);
 inline AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen) {
   std::vector<Cell> scratch;
   return adapt(tree, indicator, refine, coarsen, scratch);

@@ -291,7 +291,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       ScopedPhase ph(tm, kAmrc);
       loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
       a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen,
-                      {&tiling, &dec.owned, &red});
+                      {&tiling, &dec.owned, &red}, scene.amrc.coarsen_speed);
     }
     sum.refined += a.refined;
     sum.coarsened += a.coarsened;

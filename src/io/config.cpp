@@ -86,6 +86,7 @@ const KeySpec kKeys[] = {
     {"amrc", "refine", Kind::Float},
     {"amrc", "coarsen", Kind::Float},
     {"amrc", "every", Kind::Int},
+    {"amrc", "coarsen_speed", Kind::Float},
     {"amrc", "start_spacing", Kind::Float},
     {"amrc", "stage_drag", Kind::Float},
 };
@@ -511,6 +512,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("amrc.refine", s.amrc.refine);
   r.get("amrc.coarsen", s.amrc.coarsen);
   r.get("amrc.every", s.amrc.every);
+  r.get("amrc.coarsen_speed", s.amrc.coarsen_speed);
   r.get("amrc.start_spacing", s.amrc.start_spacing);
   r.get("amrc.stage_drag", s.amrc.stage_drag);
 }
@@ -606,6 +608,7 @@ void validate(const Config& cfg, const Scene& s) {
   check(a.coarsen >= 0 && a.coarsen < a.refine, check.given("amrc.coarsen", "amrc.refine"),
         "amrc.coarsen must be in [0, amrc.refine) = [0, " + format_double(a.refine) + ")" + got(a.coarsen));
   check(a.every >= 1, "amrc.every", "must be >= 1, got " + std::to_string(a.every));
+  check(a.coarsen_speed >= 0, "amrc.coarsen_speed", "must be >= 0 (m/s; 0: no speed condition)" + got(a.coarsen_speed));
   check(a.start_spacing >= 0, "amrc.start_spacing",
         "must be >= 0 (m; 0: the run starts on the finest mesh)" + got(a.start_spacing));
   check(a.stage_drag >= 0, "amrc.stage_drag", "must be >= 0 (1/s)" + got(a.stage_drag));
@@ -728,6 +731,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "refine", format_double(a.refine), "rad: split where a triple turns more");
   line(os, "coarsen", format_double(a.coarsen), "rad: merge where all turn less (< refine)");
   line(os, "every", std::to_string(a.every), "steps between adaptations");
+  line(os, "coarsen_speed", format_double(a.coarsen_speed), "m/s: merge only where all are slower (0: off)");
   line(os, "start_spacing", format_double(a.start_spacing),
        "m: without adaptation, start this coarse and refine at each rest (0: finest)");
   line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on every mesh while grid sequencing");

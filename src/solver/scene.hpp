@@ -87,6 +87,10 @@ struct AmrcSpec {
   double refine = 0.1;          // rad
   double coarsen = 0.02;        // rad, below refine so cells do not flip back and forth
   int every = 3;                // steps between adaptations
+  // Children merge only where every particle is slower than this (m/s): the
+  // impact is then met on the finest mesh, and the settled parts coarsen.
+  // 0: no such condition (the paper's criterion).
+  double coarsen_speed = 0;
   // Grid sequencing (amrc.enabled = false only): the run starts on a uniform
   // mesh of spacing at most this (m), and refines it everywhere by one level
   // each time the cloth comes to rest, until the finest; 0: from the finest.
