@@ -89,7 +89,10 @@ void Amrc::speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& 
   per_particle(c, share, out, [&](int64_t p) {
     if (!c.active(p)) return 0.0;
     double s = 0;
-    for (int k = 0; k < 3; ++k) s += (c.x1[3 * p + k] - c.x2[3 * p + k]) * (c.x1[3 * p + k] - c.x2[3 * p + k]);
+    for (int k = 0; k < 3; ++k) {
+      const double d = c.x1[3 * p + k] - c.x2[3 * p + k];
+      s += d * d;
+    }
     return std::sqrt(s) / c.dt_prev;
   });
 }

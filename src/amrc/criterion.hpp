@@ -15,7 +15,7 @@ struct AdaptStats {
 // One pass: every leaf whose largest indicator (over the particles of its
 // closed cell) exceeds `refine` splits; then every cell whose children are
 // all leaves with indicators below `coarsen` merges (2:1 balance permitting).
-// `indicator` has one value per particle (the run uses the bending cost).
+// `indicator` has one value per particle (the run uses the turning angle).
 // `scratch` holds the leaves (reserve (NI-1)(NJ-1) to adapt without allocating).
 // With `speed` (one value per particle), a cell merges only where every
 // particle is also slower than `coarsen_speed`.
