@@ -21,6 +21,10 @@ min=$(grep -A3 '"particles_active"' "$work/ref/report.json" | grep -o '"min": [0
 max=$(grep -A3 '"particles_active"' "$work/ref/report.json" | grep -o '"max": [0-9]*' | cut -d' ' -f2)
 (( min < max )) || { echo "FAIL: the mesh never changed (active particles $min..$max)"; exit 1; }
 echo "ok active particles $min..$max of 1089"
+mean=$(field "$work/ref" mean)
+python3 -c "import sys; sys.exit(not ($min < $mean < $max))" ||
+  { echo "FAIL: the iteration-weighted mean $mean is not strictly inside $min..$max"; exit 1; }
+echo "ok mean active particles per CG iteration $mean"
 "$drape" --config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set solver.steps=1 \
   --set output.picture=false --quiet --output "$work/finest"
 python3 - "$work/ref/report.json" "$work/finest/report.json" <<'PY'
@@ -41,6 +45,8 @@ echo "ok same checksum for 1-3 threads x 4 schedules: $ref"
 "$drape" "${scene[@]}" --set solver.steps=31 --set output.checkpoint_every=31 --threads 2 --output "$work/part"
 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=60 --threads 1 --quiet
 [[ $(sum "$work/part") == "$ref" ]] || { echo "FAIL: restart with AMRC: $(sum "$work/part") vs $ref"; exit 1; }
+[[ $(field "$work/part" mean) == "$mean" ]] ||
+  { echo "FAIL: the mean active particles after a restart: $(field "$work/part" mean) vs $mean"; exit 1; }
 h5diff "$work/ref/drape.h5" "$work/part/drape.h5" /frames /frames || { echo "FAIL: frames differ after restart"; exit 1; }
 echo "ok stopped at 31, restarted: the same state and frames"
 

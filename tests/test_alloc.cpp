@@ -48,7 +48,7 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrc) {
   auto run = [&](int steps) {
     for (int k = 0; k < steps; ++k) {
       iterations += w.loop->step(tm).iterations;
-      const AdaptStats a = amrc.adapt(w.cloth, w.fabric.density, s.cloth.shear, 0.1, 0.02);
+      const AdaptStats a = amrc.adapt(w.cloth, w.fabric.density, s.cloth.shear, Thresholds{0.1, 0.02});
       if (a.refined + a.coarsened > 0) {
         rebuild();
         ++changes;

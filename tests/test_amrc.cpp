@@ -174,7 +174,7 @@ TEST(Criterion, MovingParticlesKeepTheirCellsFine) {
   for (int i = 0; i < moving_rows; ++i)
     for (int j = 0; j < kNj; ++j) speed[size_t(i) * kNj + j] = 1.0;
   std::vector<Cell> scratch;
-  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, 1.0, 0.5, scratch, &speed, 0.1);
+  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, Thresholds{1.0, 0.5, 0.1}, scratch, &speed);
   ASSERT_TRUE(t.balanced());
   std::vector<Cell> leaves;
   t.leaves(leaves);
@@ -189,7 +189,7 @@ TEST(Criterion, MovingParticlesKeepTheirCellsFine) {
   EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
   // Once everything is slow, everything coarsens.
   std::fill(speed.begin(), speed.end(), 1e-3);
-  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, 1.0, 0.5, scratch, &speed, 0.1);
+  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, Thresholds{1.0, 0.5, 0.1}, scratch, &speed);
   t.leaves(leaves);
   for (const Cell& c : leaves) EXPECT_EQ(c.level, kMaxLevel) << c.i << "," << c.j;
 }
@@ -345,6 +345,47 @@ TEST(AmrcMesh, ForceOnSurvivingParticlesStaysBalancedAcrossSplitAndMerge) {
   EXPECT_LE(merged, 0.25 * coarse_edge) << "after the merge";
   std::printf("largest interior force / (T h_c): uniform %.3g, split %.3g, merged %.3g\n",
               before / coarse_edge, split / coarse_edge, merged / coarse_edge);
+}
+
+// amrc.indicator = "deflection": on a cloth bent round a cylinder, the
+// turning angle doubles with the spacing (0.1 rad at the finest, 0.2 and 0.4
+// at levels 1 and 2). Compared with thresholds 0.15/0.03 as they stand, every
+// leaf splits down to the finest mesh; scaled by the leaf's width, a level-1
+// leaf turns 0.2 x 1/2 = 0.1 < 0.15 and stays, and finest children merge
+// (0.1 x 1/4 < 0.03): level 1 is reached from either end.
+TEST(AmrcMesh, DeflectionStopsAUniformBendOneLevelCoarser) {
+  constexpr int n = 17;
+  constexpr double h = 0.01, radius = 0.1;
+  auto leaf_levels = [&](bool by_width, uint8_t start) {
+    World w(flat_scene(n, n, (n - 1) * h, (n - 1) * h), test_fabric());
+    Amrc amrc(w.cloth, 2);
+    amrc.restore(std::vector<uint8_t>(size_t(n - 1) * (n - 1), start));
+    amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
+    auto on_cylinder = [&] {  // every particle, solved or not, on the exact bend
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const double a = (i - (n - 1) / 2) * h / radius;
+          const double y[3] = {radius * std::sin(a), j * h, radius * (1 - std::cos(a))};
+          for (int k = 0; k < 3; ++k) {
+            const int64_t u = 3 * (int64_t(i) * n + j) + k;
+            w.cloth.z[u] = w.cloth.x1[u] = w.cloth.x2[u] = y[k];
+          }
+        }
+    };
+    for (int pass = 0; pass < 6; ++pass) {
+      on_cylinder();
+      amrc.adapt(w.cloth, w.fabric.density, w.scene.cloth.shear, Thresholds{0.15, 0.03, 0, by_width});
+    }
+    std::vector<Cell> leaves;
+    amrc.tree().leaves(leaves);
+    std::vector<int> levels;
+    for (const Cell& c : leaves) levels.push_back(c.level);
+    return levels;
+  };
+  for (uint8_t start : {uint8_t(0), uint8_t(2)}) {
+    for (int l : leaf_levels(false, start)) EXPECT_EQ(l, 0) << "angle, from level " << int(start);
+    for (int l : leaf_levels(true, start)) EXPECT_EQ(l, 1) << "deflection, from level " << int(start);
+  }
 }
 
 }  // namespace

@@ -395,6 +395,8 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
       {"key_amrc_thresholds", {"--set", "amrc.coarsen=0.5"}, {"amrc.coarsen", "amrc.refine"}},
       {"key_amrc_every", {"--set", "amrc.every=0"}, {"amrc.every", ">= 1"}},
       {"key_coarsen_speed", {"--set", "amrc.coarsen_speed=-0.1"}, {"amrc.coarsen_speed", ">= 0"}},
+      {"key_amrc_indicator", {"--set", "amrc.indicator=\"curvature\""},
+       {"amrc.indicator", "angle, deflection", "curvature"}},
       {"key_imbalance", {"--set", "parallel.imbalance=0.9"}, {"parallel.imbalance", ">= 1"}},
       {"key_reversal", {"--set", "cloth.shear_reversal=0.5"}, {"cloth.shear_reversal", "> 1"}},
       {"key_compression", {"--set", "cloth.compression=-0.1"}, {"cloth.compression", "[0, 1]"}},

@@ -131,13 +131,11 @@ void Amrc::fill_inactive(Cloth& c) const {
   }
 }
 
-AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
-                        const AdaptShare& share, double coarsen_speed) {
+AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share) {
   indicator(c, share, indicator_);
-  if (coarsen_speed > 0) speeds(c, share, speed_);
+  if (th.coarsen_speed > 0) speeds(c, share, speed_);
   old_ = tree_;
-  const AdaptStats st = drape::adapt(tree_, indicator_, refine, coarsen, cells_,
-                                     coarsen_speed > 0 ? &speed_ : nullptr, coarsen_speed);
+  const AdaptStats st = drape::adapt(tree_, indicator_, th, cells_, th.coarsen_speed > 0 ? &speed_ : nullptr);
   if (st.refined == 0 && st.coarsened == 0) return st;
   carry_over(c, density, shear);
   return st;

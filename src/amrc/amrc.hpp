@@ -43,9 +43,7 @@ class Amrc {
   // the state over and rebuilds the cloth's mesh (the caller rebuilds lists).
   // With several ranks each carries the state of its own particles (and of
   // its ghosts, which must be current, hanging ones included).
-  // coarsen_speed > 0: cells merge only where every particle is slower (m/s).
-  AdaptStats adapt(Cloth& c, double density, bool shear, double refine, double coarsen,
-                   const AdaptShare& share = {}, double coarsen_speed = 0);
+  AdaptStats adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share = {});
 
   // Grid sequencing (sequence.hpp): every leaf at `level`, the state carried
   // over as adapt() does. Between runs of time steps, like adapt().

@@ -12,6 +12,14 @@ struct AdaptStats {
   int refined = 0, coarsened = 0;
 };
 
+struct Thresholds {
+  double refine = 0.1, coarsen = 0.02;
+  double coarsen_speed = 0;  // > 0: merge only where every particle is slower
+  // Scale each leaf's indicator by its width over the coarsest leaf's
+  // (AmrcIndicator::Deflection): finer leaves need sharper turns to split.
+  bool by_width = false;
+};
+
 // One pass: every leaf whose largest indicator (over the particles of its
 // closed cell) exceeds `refine` splits; then every cell whose children are
 // all leaves with indicators below `coarsen` merges (2:1 balance permitting).
@@ -19,12 +27,11 @@ struct AdaptStats {
 // `scratch` holds the leaves (reserve (NI-1)(NJ-1) to adapt without allocating).
 // With `speed` (one value per particle), a cell merges only where every
 // particle is also slower than `coarsen_speed`.
-AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen,
-                 std::vector<Cell>& scratch, const std::vector<double>* speed = nullptr,
-                 double coarsen_speed = 0);
+AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thresholds& th,
+                 std::vector<Cell>& scratch, const std::vector<double>* speed = nullptr);
 inline AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen) {
   std::vector<Cell> scratch;
-  return adapt(tree, indicator, refine, coarsen, scratch);
+  return adapt(tree, indicator, Thresholds{refine, coarsen}, scratch);
 }
 
 }  // namespace drape

@@ -27,7 +27,8 @@ class Progress {
     std::fflush(stdout);
   }
 
-  void step(const StepStats& st) {
+  // particles >= 0: the mesh changes (AMRC, grid sequencing), show its size.
+  void step(const StepStats& st, int64_t particles = -1) {
     if (!on_) return;
     const auto now = clock::now();
     const double el = seconds(start_, now);
@@ -35,9 +36,11 @@ class Progress {
     last_ = now;
     double eta = el / std::max(1, st.step - first_) * (steps_ - st.step);
     if (limit_ > 0) eta = std::min(eta, std::max(0.0, limit_ - el));
-    std::printf("step %5d/%d  t %.4f s  dt %.3g ms  iterations %4d%s  cost %.4e  speed %.3g m/s  ETA %s\n",
+    char mesh[40] = "";
+    if (particles >= 0) std::snprintf(mesh, sizeof mesh, "  particles %lld", (long long)particles);
+    std::printf("step %5d/%d  t %.4f s  dt %.3g ms  iterations %4d%s  cost %.4e  speed %.3g m/s%s  ETA %s\n",
                 st.step, steps_, st.time, st.dt * 1e3, st.iterations, st.converged ? "" : " (max)",
-                st.cost.total(), st.max_speed, clock_text(eta).c_str());
+                st.cost.total(), st.max_speed, mesh, clock_text(eta).c_str());
     std::fflush(stdout);
   }
 

@@ -50,6 +50,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("min", (long long)s.active_min)
       .value("max", (long long)s.active_max)
       .value("final", (long long)s.active_final)
+      .value("mean", s.counters.iterations > 0 ? double(s.counters.particle_iterations) / s.counters.iterations
+                                                : double(s.active_final))
       .end_object();
   j.begin_object("amrc")
       .value("enabled", scene.amrc.enabled)

@@ -95,8 +95,9 @@ void inject_nan(Cloth& c, const ActiveLists& lists) {
     }
 }
 
-void add_step(RunCounters& n, const StepStats& st) {
+void add_step(RunCounters& n, const StepStats& st, int64_t active) {
   n.iterations += st.iterations;
+  n.particle_iterations += st.iterations * active;
   n.evaluations += st.evaluations;
   n.projections += st.projections;
   n.max_step_iterations = std::max<int64_t>(n.max_step_iterations, st.iterations);
@@ -290,8 +291,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     {
       ScopedPhase ph(tm, kAmrc);
       loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
-      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, scene.amrc.refine, scene.amrc.coarsen,
-                      {&tiling, &dec.owned, &red}, scene.amrc.coarsen_speed);
+      const Thresholds th{scene.amrc.refine, scene.amrc.coarsen, scene.amrc.coarsen_speed,
+                          scene.amrc.indicator == AmrcIndicator::Deflection};
+      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, th, {&tiling, &dec.owned, &red});
     }
     sum.refined += a.refined;
     sum.coarsened += a.coarsened;
@@ -340,11 +342,11 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     if (poison == cloth.step + 1) inject_nan(cloth, lists);
     const StepStats st = loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
     if (st.stopped) break;
-    add_step(sum.counters, st);
+    add_step(sum.counters, st, sum.active_final);
     sum.last = st;
     const bool easing = cloth.time < ease_until;
     if (easing) relax_eased_edges(cloth, lists.edges, lists.ring_edges, kEaseRate, st.dt);
-    progress.step(st);
+    progress.step(st, amrc ? sum.active_final : -1);
     const bool reached = scene.solver.end_time > 0 && cloth.time >= scene.solver.end_time;
     const bool last = st.step == scene.solver.steps || reached;
     sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed && !easing)

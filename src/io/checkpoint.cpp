@@ -86,7 +86,7 @@ std::vector<std::pair<std::string, Curve*>> curves_of(F& f) {
 std::vector<double> counter_numbers(const RunCounters& r) {
   return {double(r.iterations), double(r.evaluations), double(r.projections),
           double(r.max_step_iterations), double(r.unconverged), double(r.calm),
-          r.dt_min, r.dt_max, r.cg_first_step};
+          r.dt_min, r.dt_max, r.cg_first_step, double(r.particle_iterations)};
 }
 
 RunCounters counters_from(const std::vector<double>& v) {
@@ -100,6 +100,7 @@ RunCounters counters_from(const std::vector<double>& v) {
   r.dt_min = v[6];
   r.dt_max = v[7];
   r.cg_first_step = v[8];
+  r.particle_iterations = int64_t(v[9]);
   return r;
 }
 

@@ -38,6 +38,7 @@ struct RunCounters {
   int64_t iterations = 0, evaluations = 0, projections = 0;
   int64_t max_step_iterations = 0, unconverged = 0;
   int64_t calm = 0;               // consecutive steps below the rest speed
+  int64_t particle_iterations = 0;  // CG iterations times the active particles, summed over steps
   double dt_min = 1e300, dt_max = 0;
   double cg_first_step = 1.0;     // nonlinear CG's carried first trial step
 };

@@ -87,6 +87,7 @@ const KeySpec kKeys[] = {
     {"amrc", "coarsen", Kind::Float},
     {"amrc", "every", Kind::Int},
     {"amrc", "coarsen_speed", Kind::Float},
+    {"amrc", "indicator", Kind::String},
     {"amrc", "start_spacing", Kind::Float},
     {"amrc", "stage_drag", Kind::Float},
 };
@@ -513,6 +514,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("amrc.coarsen", s.amrc.coarsen);
   r.get("amrc.every", s.amrc.every);
   r.get("amrc.coarsen_speed", s.amrc.coarsen_speed);
+  r.get_enum("amrc.indicator", s.amrc.indicator, {AmrcIndicator::Angle, AmrcIndicator::Deflection});
   r.get("amrc.start_spacing", s.amrc.start_spacing);
   r.get("amrc.stage_drag", s.amrc.stage_drag);
 }
@@ -732,6 +734,8 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "coarsen", format_double(a.coarsen), "rad: merge where all turn less (< refine)");
   line(os, "every", std::to_string(a.every), "steps between adaptations");
   line(os, "coarsen_speed", format_double(a.coarsen_speed), "m/s: merge only where all are slower (0: off)");
+  line(os, "indicator", quote(to_string(a.indicator)),
+       "angle | deflection (the angle times the leaf's width over the coarsest's)");
   line(os, "start_spacing", format_double(a.start_spacing),
        "m: without adaptation, start this coarse and refine at each rest (0: finest)");
   line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on every mesh while grid sequencing");

@@ -38,4 +38,12 @@ const char* to_string(SolverMethod m) {
   return "?";
 }
 
+const char* to_string(AmrcIndicator i) {
+  switch (i) {
+    case AmrcIndicator::Angle: return "angle";
+    case AmrcIndicator::Deflection: return "deflection";
+  }
+  return "?";
+}
+
 }  // namespace drape

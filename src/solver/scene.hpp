@@ -10,6 +10,8 @@ enum class ObstacleShape { Box, Sphere, None };
 enum class GradientMode { Analytic, Numeric };
 enum class Schedule { ActiveLists, Static, Dynamic, Guided };
 enum class SolverMethod { Newton, Cg };
+// What AMRC's thresholds are compared with (AmrcSpec::indicator).
+enum class AmrcIndicator { Angle, Deflection };
 
 struct ClothSpec {
   std::array<int, 2> particles{1000, 1000};  // NI (warp, i) x NJ (weft, j)
@@ -91,6 +93,13 @@ struct AmrcSpec {
   // impact is then met on the finest mesh, and the settled parts coarsen.
   // 0: no such condition (the paper's criterion).
   double coarsen_speed = 0;
+  // angle: the turning angle itself, the same threshold on every level (the
+  // paper's kind of criterion). deflection: the angle times the leaf's width
+  // over the coarsest leaf's, so the thresholds read as angles at the coarsest
+  // spacing and a leaf half as wide must turn twice as much to split: what a
+  // leaf's flat surface misses grows with width x angle, and this spends the
+  // particles where that is large.
+  AmrcIndicator indicator = AmrcIndicator::Angle;
   // Grid sequencing (amrc.enabled = false only): the run starts on a uniform
   // mesh of spacing at most this (m), and refines it everywhere by one level
   // each time the cloth comes to rest, until the finest; 0: from the finest.
@@ -116,5 +125,6 @@ const char* to_string(ObstacleShape s);
 const char* to_string(GradientMode g);
 const char* to_string(Schedule s);
 const char* to_string(SolverMethod m);
+const char* to_string(AmrcIndicator i);
 
 }  // namespace drape
