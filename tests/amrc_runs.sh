@@ -56,3 +56,17 @@ OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set solver.steps=31 -
 [[ $(sum "$work/part2") == "$ref" ]] || { echo "FAIL: 2 ranks, then 1 from the checkpoint: $(sum "$work/part2") vs $ref"; exit 1; }
 h5diff "$work/ref/drape.h5" "$work/part2/drape.h5" /frames /frames || { echo "FAIL: frames differ (2 ranks, restart)"; exit 1; }
 echo "ok 31 steps on 2 ranks, restarted on 1: the same state and frames"
+
+# amrc.start_spacing with AMRC: a new run starts on leaves that wide (level 2
+# here: 9 x 9 of the 33 x 33 particles), a restart on its checkpoint's tree.
+coarse=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
+        --set output.picture=false --set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2
+        --set amrc.start_spacing=0.13 --set solver.steps=20)
+"$drape" "${coarse[@]}" --threads 2 --output "$work/coarse" > "$work/coarse.out"
+first=$(grep -m1 '^step' "$work/coarse.out")
+[[ $first =~ particles\ 81\  ]] || { echo "FAIL: the first step did not run on the 9 x 9 mesh: $first"; exit 1; }
+"$drape" "${coarse[@]}" --set solver.steps=10 --set output.checkpoint_every=10 --quiet --output "$work/coarse-part"
+"$drape" --restart "$work/coarse-part/checkpoint.h5" --set solver.steps=20 --quiet
+[[ $(sum "$work/coarse-part") == $(sum "$work/coarse") ]] ||
+  { echo "FAIL: start_spacing, restarted: $(sum "$work/coarse-part") vs $(sum "$work/coarse")"; exit 1; }
+echo "ok start_spacing 0.13: the first step on 81 particles; a restart keeps its tree"

@@ -95,6 +95,15 @@ void inject_nan(Cloth& c, const ActiveLists& lists) {
     }
 }
 
+// AMRC with amrc.start_spacing: a new run starts on leaves that wide (at
+// most max_level), not on the finest mesh. The criterion coarsens a flat
+// cloth one level per adaptation; with coarsen_speed the cloth is moving
+// before it gets far, so without this the fall's mesh depends on the grid.
+int amrc_start_level(const Scene& scene, const Grid& g, bool restart) {
+  if (!scene.amrc.enabled || restart) return 0;
+  return std::min(scene.amrc.max_level, sequence_start_level(g, scene.amrc.start_spacing));
+}
+
 void add_step(RunCounters& n, const StepStats& st, int64_t active) {
   n.iterations += st.iterations;
   n.particle_iterations += st.iterations * active;
@@ -163,6 +172,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         if (sequence_level > 0) sequence_level = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];
       } else if (sequence_level > 0) {
         amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, sequence_level);
+      } else if (const int l = amrc_start_level(scene, cloth.grid, opt.restart != nullptr); l > 0) {
+        amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, l);
       }
       amrc->apply(cloth, fabric.density, scene.cloth.shear);
     }

@@ -100,9 +100,11 @@ struct AmrcSpec {
   // leaf's flat surface misses grows with width x angle, and this spends the
   // particles where that is large.
   AmrcIndicator indicator = AmrcIndicator::Angle;
-  // Grid sequencing (amrc.enabled = false only): the run starts on a uniform
+  // Grid sequencing (amrc.enabled = false): the run starts on a uniform
   // mesh of spacing at most this (m), and refines it everywhere by one level
   // each time the cloth comes to rest, until the finest; 0: from the finest.
+  // With AMRC: a new run starts with every leaf that wide (at most
+  // max_level) and adapts from there; 0: from the finest (the paper's).
   double start_spacing = 0.04;
   // Air drag (1/s) on those coarser meshes: they are the way to the rest
   // state, not the result, so they may settle faster than air would let
