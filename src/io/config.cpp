@@ -737,7 +737,7 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "indicator", quote(to_string(a.indicator)),
        "angle | deflection (the angle times the leaf's width over the coarsest's)");
   line(os, "start_spacing", format_double(a.start_spacing),
-       "m: without adaptation, start this coarse and refine at each rest (0: finest)");
+       "m: start this coarse (AMRC: leaves this wide; else refine at each rest); 0: finest");
   line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on every mesh while grid sequencing");
   return os.str();
 }
