@@ -12,8 +12,10 @@ struct AdaptStats {
   int refined = 0, coarsened = 0;
 };
 
+// AmrcSpec's values as the criterion reads them (no defaults of its own: a
+// forgotten refine/coarsen fails adapt()'s coarsen < refine check).
 struct Thresholds {
-  double refine = 0.1, coarsen = 0.02;
+  double refine = 0, coarsen = 0;
   double coarsen_speed = 0;  // > 0: merge only where every particle is slower
   // Scale each leaf's indicator by its width over the coarsest leaf's
   // (AmrcIndicator::Deflection): finer leaves need sharper turns to split.

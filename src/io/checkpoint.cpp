@@ -26,7 +26,7 @@ using namespace h5;
 namespace {
 
 const char* const kFormat = "drape checkpoint";
-const int64_t kFormatVersion = 1;
+const int64_t kFormatVersion = 2;  // 2: counters gained particle_iterations
 
 // ------------------------------------------------------------ the digest --
 
