@@ -1,6 +1,7 @@
 #include "amrc/active_lists.hpp"
 
 #include "amrc/quadtree.hpp"
+#include "solver/kernels.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -214,7 +215,8 @@ void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
       c.edge_on[2 * p + d] = on && c.next[d][p] >= 0;
       c.triple_on[2 * p + d] = on && c.next[d][p] >= 0 && c.prev[d][p] >= 0;
     }
-    c.shear_on[p] = shear_enabled && on && c.next[0][p] >= 0 && c.next[1][p] >= 0;
+    int64_t ids[5];
+    c.shear_on[p] = shear_enabled && on && shear_quadrants(shear_arms(c, p, ids)) > 0;
   }
 }
 
@@ -250,8 +252,10 @@ void rebuild_geometry(Cloth& c, double density) {
       c.triple_rest[s] = c.triple_on[s] ? ext[d] : 0;
       c.triple_width[s] = c.triple_on[s] ? ext[1 - d] : 0;
     }
-    c.shear_area[p] = c.shear_on[p] ? len[0] * len[1] : 0;
-    c.shear_rest[p] = c.shear_on[p] ? std::sqrt(len[0] * len[1]) : 0;
+    // A cross stands for the particle's own area, a quarter of each cell
+    // around it (as its mass does).
+    c.shear_area[p] = c.shear_on[p] ? ext[0] * ext[1] : 0;
+    c.shear_rest[p] = c.shear_on[p] ? std::sqrt(ext[0] * ext[1]) : 0;
   }
 }
 

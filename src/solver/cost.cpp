@@ -25,7 +25,7 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   const int64_t n = cloth.grid.n();
   buf_e_.assign(2 * n * 6, 0.0);
   buf_t_.assign(2 * n * 9, 0.0);
-  buf_s_.assign(n * 9, 0.0);
+  buf_s_.assign(n * kShearSlot, 0.0);
   cost_p_.assign(n, 0.0);
   cost_e_.assign(2 * n, 0.0);
   cost_t_.assign(2 * n, 0.0);
@@ -84,11 +84,14 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
 }
 
 void Evaluator::shear_forces(int64_t s, const double* z) {
-  V g[3];
-  const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
+  int64_t ids[5];
+  const unsigned arms = shear_arms(c_, s, ids);
+  V x[5], g[5];
+  for (int k = 0; k < 5; ++k) x[k] = at(z, ids[k]);
+  const double phi = shear_cross(x, arms, g);
   const double A = c_.shear_area[s];
   const double f = z[c_.layout.shear() + s];
-  for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], g[k], f * A);
+  for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], g[k], f * A);
   const BandValue bv = m_.shear.at(phi);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
@@ -186,22 +189,24 @@ void Evaluator::triple_gradient(int64_t s, const double* z, double* grad) {
 }
 
 void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
-  const int64_t ids[3] = {s, c_.next[0][s], c_.next[1][s]};
-  V r[3];
-  V3<Dual> xd[3];
-  for (int k = 0; k < 3; ++k) {
-    r[k] = residual_of(c_, rho_, ids[k]);
+  int64_t ids[5];
+  const unsigned arms = shear_arms(c_, s, ids);
+  V r[5];
+  V3<Dual> xd[5];
+  for (int k = 0; k < 5; ++k) {
+    // An absent arm stands in as the centre; its residual must not count twice.
+    r[k] = k > 0 && !(arms >> k & 1u) ? V{0, 0, 0} : residual_of(c_, rho_, ids[k]);
     const double rv[3] = {r[k].x, r[k].y, r[k].z};
     xd[k] = load3(z + 3 * ids[k], rv);
   }
-  V3<Dual> gd[3];
-  drape::shear_gradient(xd[0], xd[1], xd[2], gd);
+  V3<Dual> gd[5];
+  shear_cross<Dual, false>(xd, arms, gd);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
   const double fa = f * A / m_.force_scale, gq = gq_s_[s];
   double gr = 0;
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 5; ++k) {
     const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
-    put(&buf_s_[9 * s + 3 * k], fa * hr + gq * g, 1.0);
+    put(&buf_s_[kShearSlot * s + 3 * k], fa * hr + gq * g, 1.0);
     gr += dot(g, r[k]);
   }
   grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[s];
@@ -370,16 +375,18 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
         (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
   for_shears([&](int64_t s) {
-    const int64_t ids[3] = {s, c_.next[0][s], c_.next[1][s]};
-    V g[3];
-    const double phi = shear_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), g);
+    int64_t ids[5];
+    const unsigned arms = shear_arms(c_, s, ids);
+    V x[5], g[5];
+    for (int k = 0; k < 5; ++k) x[k] = at(z, ids[k]);
+    const double phi = shear_cross(x, arms, g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
     const double slope = band_slope(c_.layout.shear() - c_.layout.tension() + s, m_.shear, f, phi) * A / Lr;
     double nf = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double g2 = dot(g[k], g[k]);
+    for (int k = 0; k < 5; ++k) {
+      const double g2 = dot(g[k], g[k]);  // 0 for an absent arm
       const double geo = f * A * std::sqrt(g2) / Lr;
-      buf_s_[9 * s + 3 * k] = (3 * geo * geo + slope * slope * g2) * inv2;
+      buf_s_[kShearSlot * s + 3 * k] = (5 * geo * geo + slope * slope * g2) * inv2;
       nf += c_.free(ids[k]) ? g2 : 0;
     }
     const double lam = A / Lr;

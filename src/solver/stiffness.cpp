@@ -36,8 +36,11 @@ inline double triple_curvature(const Cloth& c, const double* x, int64_t s) {
          c.triple_rest[s];
 }
 inline double shear_strain(const Cloth& c, const double* x, int64_t s) {
-  V g[3];
-  return shear_angle(at(x, s), at(x, c.next[0][s]), at(x, c.next[1][s]), g);
+  int64_t ids[5];
+  const unsigned arms = shear_arms(c, s, ids);
+  V xs[5], g[5];
+  for (int k = 0; k < 5; ++k) xs[k] = at(x, ids[k]);
+  return shear_cross(xs, arms, g);
 }
 }  // namespace
 
@@ -105,11 +108,14 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * value_of(g[k]));
   };
   auto shear = [&](int64_t s) {
-    V3<Dual> g[3];
-    const Dual phi = shear_angle(at(z, v, s), at(z, v, c_.next[0][s]), at(z, v, c_.next[1][s]), g);
+    int64_t ids[5];
+    const unsigned arms = shear_arms(c_, s, ids);
+    V3<Dual> xs[5], g[5];
+    for (int k = 0; k < 5; ++k) xs[k] = at(z, v, ids[k]);
+    const Dual phi = shear_cross(xs, arms, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi.v).df_dq;
     const double stiff = c_.shear_area[s] * slope * phi.d;
-    for (int k = 0; k < 3; ++k) put(&buf_s_[9 * s + 3 * k], stiff * value_of(g[k]));
+    for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * value_of(g[k]));
   };
   const double ca = m_.inertia_coeff();
   auto particle = [&](int64_t p) {
@@ -174,10 +180,13 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   };
   auto shear = [&](int64_t s) {
-    V g[3];
-    const double phi = shear_angle(at(z, s), at(z, c_.next[0][s]), at(z, c_.next[1][s]), g);
+    int64_t ids[5];
+    const unsigned arms = shear_arms(c_, s, ids);
+    V xs[5], g[5];
+    for (int k = 0; k < 5; ++k) xs[k] = at(z, ids[k]);
+    const double phi = shear_cross(xs, arms, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
-    for (int k = 0; k < 3; ++k) buf_s_[9 * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
+    for (int k = 0; k < 5; ++k) buf_s_[kShearSlot * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
   };
   const double ca = m_.inertia_coeff();
   auto particle = [&](int64_t p) {
