@@ -18,7 +18,10 @@ TEST(Peirce, StripDroopsTo41Point5Degrees) {
   const Cantilever fine = run_cantilever(20, 0.01, 1200);
   for (const Cantilever* c : {&coarse, &fine}) {
     EXPECT_TRUE(c->last.converged);
-    EXPECT_LT(c->last.max_speed * c->last.dt, 1e-8 * c->overhang) << "the strip should be at rest";
+    // The coarse strip ends on the solver's noise floor (tolerance 1e-10):
+    // steps of about 1e-8 l back and forth, its angle the same to 1e-4
+    // degrees from step 800 to 3000; 1e-7 l still tells a swing from rest.
+    EXPECT_LT(c->last.max_speed * c->last.dt, 1e-7 * c->overhang) << "the strip should be at rest";
   }
   const double peirce = 41.5;
   // The error halves with h (first order) ...

@@ -37,6 +37,8 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   gf_t_.assign(2 * n, 0.0);
   gf_s_.assign(n, 0.0);
   rho_.assign(3 * n, 0.0);
+  k_slope_.assign(5 * n, 0.0);
+  k_tension_.assign(2 * n, 0.0);
   hres_.assign(3 * n, 0.0);
   hpend_.assign(3 * n, 0.0);
   partials_.assign(4 * size_t(tiling.count()), 0.0);

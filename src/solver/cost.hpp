@@ -68,8 +68,13 @@ class Evaluator {
   // left out so that K stays positive definite). Written at the free
   // particles' positions (hanging ones': 0) only, the entries Newton's
   // vectors live on (ActiveLists::position_spans).
+  // Needs stiffness_diagonal at the same z first (Newton's linear CG calls it
+  // once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
-  // Its diagonal, at the same entries.
+  // Its diagonal, at the same entries. Also freezes each element's band
+  // slope (and each edge's tension) at z for stiffness_product, so that a
+  // product evaluates no band, power law or angle: those cost more than the
+  // product's own arithmetic, once per product.
   void stiffness_diagonal(const double* z, double* diag);
 
   // Per-slot bending cost of the last evaluate() (the AMRC criterion).
@@ -150,6 +155,8 @@ class Evaluator {
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
+  std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
+                                                  // the tension block) and edge tensions
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy

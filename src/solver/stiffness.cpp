@@ -19,6 +19,12 @@ inline void put(double* out, const V& v) {
   out[2] = v.z;
 }
 inline V value_of(const V3<Dual>& a) { return {a.x.v, a.y.v, a.z.v}; }
+// A strain's change along v, from its gradient g over particles ids.
+inline double along(const V* g, const int64_t* ids, int n, const double* v) {
+  double d = 0;
+  for (int k = 0; k < n; ++k) d += dot(g[k], at(v, ids[k]));
+  return d;
+}
 inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 
 // Each element's generalized strain at positions x, as its band reads it:
@@ -91,31 +97,28 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     V3<Dual> g[2];
     const Dual len = edge_length(at(z, v, p), at(z, v, c_.next[d][p]), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
-    const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len.v / L0 - 1);
-    const double tension = std::max(0.0, st.f), stiff = st.df_dq / L0 * len.d;
+    const double tension = k_tension_[s], stiff = k_slope_[s] / L0 * len.d;
     for (int k = 0; k < 2; ++k)
       put(&buf_e_[6 * s + 3 * k], w * (tension * deriv_of(g[k]) + stiff * value_of(g[k])));
   };
   auto triple = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
-    V3<Dual> g[3];
-    const Dual th = bend_angle(at(z, v, c_.prev[d][p]), at(z, v, p), at(z, v, c_.next[d][p]),
-                               load3<Dual>(&c_.bend_axis[3 * s]), g);
+    const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
+    V g[3];
+    bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
-    const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th.v / Lm).df_dq;
-    const double stiff = w * slope / Lm * th.d;
-    for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * value_of(g[k]));
+    const double stiff = w * k_slope_[L.moment() - fo + s] / Lm * along(g, ids, 3, v);
+    for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * g[k]);
   };
   auto shear = [&](int64_t s) {
     int64_t ids[5];
     const unsigned arms = shear_arms(c_, s, ids);
-    V3<Dual> xs[5], g[5];
-    for (int k = 0; k < 5; ++k) xs[k] = at(z, v, ids[k]);
-    const Dual phi = shear_cross(xs, arms, g);
-    const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi.v).df_dq;
-    const double stiff = c_.shear_area[s] * slope * phi.d;
-    for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * value_of(g[k]));
+    V xs[5], g[5];
+    for (int k = 0; k < 5; ++k) xs[k] = at(z, ids[k]);
+    shear_cross<double, false>(xs, arms, g);
+    const double stiff = c_.shear_area[s] * k_slope_[L.shear() - fo + s] * along(g, ids, 5, v);
+    for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
   auto particle = [&](int64_t p) {
@@ -166,6 +169,8 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
     const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len / L0 - 1);
+    k_tension_[s] = std::max(0.0, st.f);
+    k_slope_[s] = st.df_dq;
     for (int k = 0; k < 2; ++k)
       buf_e_[6 * s + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
   };
@@ -177,6 +182,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
                                  load3<double>(&c_.bend_axis[3 * s]), g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
     const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / Lm).df_dq;
+    k_slope_[L.moment() - fo + s] = slope;
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   };
   auto shear = [&](int64_t s) {
@@ -186,6 +192,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     for (int k = 0; k < 5; ++k) xs[k] = at(z, ids[k]);
     const double phi = shear_cross(xs, arms, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
+    k_slope_[L.shear() - fo + s] = slope;
     for (int k = 0; k < 5; ++k) buf_s_[kShearSlot * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
   };
   const double ca = m_.inertia_coeff();
