@@ -2,6 +2,7 @@
 frame of its drape.h5, prints the table and writes table1.json."""
 import json
 import sys
+import tomllib
 
 import h5py
 import numpy as np
@@ -14,10 +15,11 @@ def final_positions(run):
 
 
 def cloth_width(run):
-    """The flat cloth's extent along i, from the first frame (t = 0)."""
+    """The cloth's size along i, from the scene the run wrote (a restarted
+    run's first frame is not the flat cloth)."""
     with h5py.File(f"{run}/drape.h5", "r") as f:
-        first = np.array(f["frames"][sorted(f["frames"].keys())[0]]["positions"])
-        return float(np.ptp(first[..., 0]))
+        scene = tomllib.loads(f.attrs["scene_toml"].decode())
+        return float(scene["cloth"]["size"][0])
 
 
 def on_grid(x, n):
