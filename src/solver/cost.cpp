@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "solver/kernels.hpp"
+#include "solver/shear_cross.hpp"
 
 namespace drape {
 
@@ -86,11 +87,9 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
 }
 
 void Evaluator::shear_forces(int64_t s, const double* z) {
-  int64_t ids[5];
-  const unsigned arms = shear_arms(c_, s, ids);
-  V x[5], g[5];
-  for (int k = 0; k < 5; ++k) x[k] = at(z, ids[k]);
-  const double phi = shear_cross(x, arms, g);
+  const CrossAt a = cross_at(c_, z, s);
+  V g[5];
+  const double phi = shear_cross(a.x, a.arms, g);
   const double A = c_.shear_area[s];
   const double f = z[c_.layout.shear() + s];
   for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], g[k], f * A);
@@ -377,11 +376,9 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
         (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
   for_shears([&](int64_t s) {
-    int64_t ids[5];
-    const unsigned arms = shear_arms(c_, s, ids);
-    V x[5], g[5];
-    for (int k = 0; k < 5; ++k) x[k] = at(z, ids[k]);
-    const double phi = shear_cross(x, arms, g);
+    const CrossAt a = cross_at(c_, z, s);
+    V g[5];
+    const double phi = shear_cross(a.x, a.arms, g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
     const double slope = band_slope(c_.layout.shear() - c_.layout.tension() + s, m_.shear, f, phi) * A / Lr;
     double nf = 0;
@@ -389,7 +386,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
       const double g2 = dot(g[k], g[k]);  // 0 for an absent arm
       const double geo = f * A * std::sqrt(g2) / Lr;
       buf_s_[kShearSlot * s + 3 * k] = (5 * geo * geo + slope * slope * g2) * inv2;
-      nf += c_.free(ids[k]) ? g2 : 0;
+      nf += c_.free(a.ids[k]) ? g2 : 0;
     }
     const double lam = A / Lr;
     diag[c_.layout.shear() + s] =

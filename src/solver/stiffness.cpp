@@ -6,6 +6,7 @@
 
 #include "solver/cost.hpp"
 #include "solver/kernels.hpp"
+#include "solver/shear_cross.hpp"
 
 namespace drape {
 
@@ -42,11 +43,9 @@ inline double triple_curvature(const Cloth& c, const double* x, int64_t s) {
          c.triple_rest[s];
 }
 inline double shear_strain(const Cloth& c, const double* x, int64_t s) {
-  int64_t ids[5];
-  const unsigned arms = shear_arms(c, s, ids);
-  V xs[5], g[5];
-  for (int k = 0; k < 5; ++k) xs[k] = at(x, ids[k]);
-  return shear_cross(xs, arms, g);
+  const CrossAt a = cross_at(c, x, s);
+  V g[5];
+  return shear_cross(a.x, a.arms, g);
 }
 }  // namespace
 
@@ -112,12 +111,10 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * g[k]);
   };
   auto shear = [&](int64_t s) {
-    int64_t ids[5];
-    const unsigned arms = shear_arms(c_, s, ids);
-    V xs[5], g[5];
-    for (int k = 0; k < 5; ++k) xs[k] = at(z, ids[k]);
-    shear_cross<double, false>(xs, arms, g);
-    const double stiff = c_.shear_area[s] * k_slope_[L.shear() - fo + s] * along(g, ids, 5, v);
+    const CrossAt a = cross_at(c_, z, s);
+    V g[5];
+    shear_cross<double, false>(a.x, a.arms, g);
+    const double stiff = c_.shear_area[s] * k_slope_[L.shear() - fo + s] * along(g, a.ids, 5, v);
     for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
@@ -186,11 +183,9 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   };
   auto shear = [&](int64_t s) {
-    int64_t ids[5];
-    const unsigned arms = shear_arms(c_, s, ids);
-    V xs[5], g[5];
-    for (int k = 0; k < 5; ++k) xs[k] = at(z, ids[k]);
-    const double phi = shear_cross(xs, arms, g);
+    const CrossAt a = cross_at(c_, z, s);
+    V g[5];
+    const double phi = shear_cross(a.x, a.arms, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
     k_slope_[L.shear() - fo + s] = slope;
     for (int k = 0; k < 5; ++k) buf_s_[kShearSlot * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
