@@ -234,6 +234,31 @@ TEST(Criterion, SharpFoldRefinesToTheFinestLevel) {
   EXPECT_NEAR(total_mass(t), exact_mass(), 1e-12 * exact_mass());
 }
 
+// A pass must not depend on the order it visits cells in: a mirror-symmetric
+// mesh and indicator stay mirror-symmetric. Here a band of finest leaves
+// (rows 4-11 of 16) lies between coarse parents whose merges wait on the
+// band's: merged one by one in row order, the parent before the band stayed
+// and the one after merged, and a symmetric drape leaned to one side.
+TEST(Criterion, APassIsItsOwnMirrorImage) {
+  constexpr int n = 17, cells = n - 1;
+  Quadtree t(n, n, 2);
+  std::vector<uint8_t> levels(size_t(cells) * cells, 1);
+  for (int ci = 4; ci < 12; ++ci)
+    for (int cj = 0; cj < cells; ++cj) levels[size_t(ci) * cells + cj] = 0;
+  t.set_levels(levels);
+  const std::vector<double> flat(size_t(n) * n, 0.0);
+  for (int pass = 0; pass < 3; ++pass) {
+    adapt(t, flat, 1.0, 0.5);
+    ASSERT_TRUE(t.balanced()) << "pass " << pass;
+    for (int ci = 0; ci < cells; ++ci)
+      for (int cj = 0; cj < cells; ++cj) {
+        ASSERT_EQ(t.leaf_at(ci, cj).level, t.leaf_at(cells - 1 - ci, cj).level)
+            << "pass " << pass << ": cell row " << ci << " and its mirror row " << cells - 1 - ci << ", column " << cj;
+      }
+  }
+  for (int ci = 0; ci < cells; ++ci) EXPECT_EQ(t.leaf_at(ci, 0).level, 2) << ci << ": a flat cloth ends coarsest";
+}
+
 }  // namespace
 }  // namespace drape::test
 

@@ -31,19 +31,26 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
       ++st.refined;
     }
   }
+  // Merges are judged on the tree as this sweep found it, then made: made one
+  // by one, a merge could unblock a neighbour's later in the same sweep but
+  // not an earlier one's, so the mesh (and a symmetric drape) would follow the
+  // sweep's order. Merges judged together never block one another (each makes
+  // cells coarser only), so each still holds when it is made.
   tree.leaves(snapshot);
-  for (const Cell& c : snapshot) {
+  size_t merges = 0;  // the parents to merge, written over the front of snapshot
+  for (size_t k = 0; k < snapshot.size(); ++k) {
+    const Cell c = snapshot[k];
     if (c.level >= tree.max_level()) continue;
     const int l = c.level + 1;
     const Cell parent{(c.i >> l) << l, (c.j >> l) << l, l};
     if (parent.i != c.i || parent.j != c.j) continue;  // visit each parent once, from its first child
     // The children's particles, measured at the children's spacing.
     if (tree.can_coarsen(parent) && largest(tree, parent, indicator) * scale(c.level) < th.coarsen &&
-        (!speed || largest(tree, parent, *speed) < th.coarsen_speed)) {
-      tree.coarsen(parent);
-      ++st.coarsened;
-    }
+        (!speed || largest(tree, parent, *speed) < th.coarsen_speed))
+      snapshot[merges++] = parent;
   }
+  for (size_t k = 0; k < merges; ++k) tree.coarsen(snapshot[k]);
+  st.coarsened = int(merges);
   return st;
 }
 

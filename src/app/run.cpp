@@ -95,15 +95,6 @@ void inject_nan(Cloth& c, const ActiveLists& lists) {
     }
 }
 
-// AMRC with amrc.start_spacing: a new run starts on leaves that wide (at
-// most max_level), not on the finest mesh. The criterion coarsens a flat
-// cloth one level per adaptation; with coarsen_speed the cloth is moving
-// before it gets far, so without this the fall's mesh depends on the grid.
-int amrc_start_level(const Scene& scene, const Grid& g, bool restart) {
-  if (!scene.amrc.enabled || restart) return 0;
-  return std::min(scene.amrc.max_level, sequence_start_level(g, scene.amrc.start_spacing));
-}
-
 void add_step(RunCounters& n, const StepStats& st, int64_t active) {
   n.iterations += st.iterations;
   n.particle_iterations += st.iterations * active;
@@ -162,9 +153,10 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       sum.counters = opt.restart->counters;
       sum.first_step = cloth.step;
     }
+    // The uniform level amrc.start_spacing asks a new run to start on (0: the finest).
+    const int start_level = sequence_start_level(cloth.grid, scene.amrc.start_spacing);
     // A restart goes on on its checkpoint's mesh: the finest one where it holds no tree.
-    if (!scene.amrc.enabled && !(opt.restart && opt.restart->amrc_levels.empty()))
-      sequence_level = sequence_start_level(cloth.grid, scene.amrc.start_spacing);
+    if (!scene.amrc.enabled && !(opt.restart && opt.restart->amrc_levels.empty())) sequence_level = start_level;
     if (scene.amrc.enabled || sequence_level > 0) {  // from the finest mesh (paper), or the checkpoint's
       amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level);
       if (opt.restart && !opt.restart->amrc_levels.empty()) {
@@ -172,8 +164,11 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         if (sequence_level > 0) sequence_level = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];
       } else if (sequence_level > 0) {
         amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, sequence_level);
-      } else if (const int l = amrc_start_level(scene, cloth.grid, opt.restart != nullptr); l > 0) {
-        amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, l);
+      } else if (scene.amrc.enabled && !opt.restart && start_level > 0) {
+        // AMRC starts on leaves that wide (at most max_level), not on the finest mesh: the
+        // criterion coarsens a flat cloth one level per adaptation, and with coarsen_speed
+        // the cloth is moving before it gets far, so the fall's mesh would depend on the grid.
+        amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, std::min(scene.amrc.max_level, start_level));
       }
       amrc->apply(cloth, fabric.density, scene.cloth.shear);
     }
