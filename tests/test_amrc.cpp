@@ -259,6 +259,33 @@ TEST(Criterion, APassIsItsOwnMirrorImage) {
   for (int ci = 0; ci < cells; ++ci) EXPECT_EQ(t.leaf_at(ci, 0).level, 2) << ci << ": a flat cloth ends coarsest";
 }
 
+// The inside mask (bit 0: the mesh puts the particle inside an obstacle;
+// bit l: merging the level-l cell round it would): a flat cloth coarsens
+// everywhere but where a merge would cut in, and a leaf holding a particle
+// placed inside splits down to the finest mesh.
+TEST(Criterion, NoLeafCutsIntoTheObstacle) {
+  const std::vector<double> flat(size_t(kNi) * kNj, 0.0);
+  std::vector<double> inside(flat.size(), 0.0);
+  const int64_t stays = int64_t(9) * kNj + 5;  // merging level 2 round (9, 5) would cut in
+  inside[stays] = 4.0;                         // bit 2
+  Quadtree t(kNi, kNj, kMaxLevel);
+  std::vector<Cell> scratch;
+  for (int pass = 0; pass < 10; ++pass) adapt(t, flat, Thresholds{1.0, 0.5}, scratch, nullptr, &inside);
+  ASSERT_TRUE(t.balanced());
+  for (int ci : {8, 9})
+    for (int cj : {4, 5}) EXPECT_EQ(t.leaf_at(ci, cj).level, 1) << ci << "," << cj << ": its level-2 cell cuts in";
+  EXPECT_EQ(t.leaf_at(20, 16).level, kMaxLevel) << "far from it the cloth coarsens";
+  // Now the coarse leaf round (17, 13) places that particle inside: it splits to the finest.
+  const int64_t cut = int64_t(17) * kNj + 13;
+  ASSERT_GT(t.leaf_at(17, 13).level, 0);
+  std::fill(inside.begin(), inside.end(), 0.0);
+  inside[cut] = 1.0;
+  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, Thresholds{1.0, 0.5}, scratch, nullptr, &inside);
+  ASSERT_TRUE(t.balanced());
+  for (int ci : {16, 17})
+    for (int cj : {12, 13}) EXPECT_EQ(t.leaf_at(ci, cj).level, 0) << ci << "," << cj;
+}
+
 }  // namespace
 }  // namespace drape::test
 
@@ -410,6 +437,105 @@ TEST(AmrcMesh, DeflectionStopsAUniformBendOneLevelCoarser) {
   for (uint8_t start : {uint8_t(0), uint8_t(2)}) {
     for (int l : leaf_levels(false, start)) EXPECT_EQ(l, 0) << "angle, from level " << int(start);
     for (int l : leaf_levels(true, start)) EXPECT_EQ(l, 1) << "deflection, from level " << int(start);
+  }
+}
+
+// A cloth draped over a box's edge (grid line i = 3) on level-1 leaves: the
+// leaf [2, 4] spans the edge, so its middle particles lie on a chord cutting
+// through the box. Refining the leaf next to one of them makes it hang on the
+// chord; refining its own leaf then frees it, and it must be lifted out of
+// the box (with its velocity) like a particle freed straight from a leaf's
+// inside, or the contact throws it out at tens of m/s (the 257 x 257 drape's
+// speed spikes at t = 0.32 s, where the sides hit the box's walls).
+// A 9 x 9 cloth (spacing h) over the edge of a box whose face is x = 0 and
+// top z = 0.4: rows i <= 3 on the top, the rest hanging down the face, all
+// at the contact margin and moving with velocity v.
+constexpr int kEdgeN = 9, kEdgeRow = 3;
+constexpr double kEdgeH = 0.01, kBoxTop = 0.4;
+
+Scene edge_scene() {
+  constexpr int n = kEdgeN;
+  Scene s = flat_scene(n, n, (n - 1) * kEdgeH, (n - 1) * kEdgeH);
+  s.obstacle.shape = ObstacleShape::Box;
+  s.obstacle.center = {-0.5, 0.5 * (n - 1) * kEdgeH, kBoxTop - 0.5};
+  s.obstacle.size = {1.0, 1.0, 1.0};
+  return s;
+}
+
+void drape_over_the_edge(World& w, const double v[3]) {
+  constexpr int n = kEdgeN;
+  const double th = w.model.contact.thickness, dt = w.cloth.dt_prev;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const bool on_top = i <= kEdgeRow;
+      const double y[3] = {on_top ? (i - kEdgeRow) * kEdgeH : th, j * kEdgeH,
+                           on_top ? kBoxTop + th : kBoxTop - (i - kEdgeRow) * kEdgeH};
+      for (int k = 0; k < 3; ++k) {
+        const int64_t u = 3 * (int64_t(i) * n + j) + k;
+        w.cloth.z[u] = w.cloth.x1[u] = y[k];
+        w.cloth.x2[u] = y[k] - v[k] * dt;
+      }
+    }
+}
+
+TEST(AmrcMesh, ParticlesFreedInsideTheBoxAreLifted) {
+  constexpr int n = kEdgeN, edge = kEdgeRow;
+  const double v[3] = {0.3, -0.2, -1.0};  // m/s
+  World w(edge_scene(), test_fabric());
+  drape_over_the_edge(w, v);
+  const Contact& contact = w.model.contact;
+  const Scene& s = w.scene;
+  const double th = contact.thickness, dt = w.cloth.dt_prev;
+  Amrc amrc(w.cloth, 1);
+  std::vector<uint8_t> levels(size_t(n - 1) * (n - 1), 1);
+  amrc.set_levels(w.cloth, w.fabric.density, s.cloth.shear, levels);
+  amrc.fill_inactive(w.cloth);  // the odd particles onto their leaves' surfaces
+  const int64_t p = int64_t(edge) * n + 2;  // on the side shared by leaves [2,4]x[0,2] and [2,4]x[2,4]
+  ASSERT_LT(clearance(contact.obstacle, w.cloth.x() + 3 * p), -0.5 * th) << "the chord should cut the box";
+  auto refine = [&](int cj0) {  // the level-1 leaf [2,4] x [cj0, cj0 + 2] to the finest
+    for (int ci = 2; ci < 4; ++ci)
+      for (int cj = cj0; cj < cj0 + 2; ++cj) levels[size_t(ci) * (n - 1) + cj] = 0;
+    amrc.set_levels(w.cloth, w.fabric.density, s.cloth.shear, levels);
+    amrc.lift_new_particles(w.cloth, contact);
+  };
+  refine(0);
+  ASSERT_TRUE(w.cloth.flags[p] & kHanging) << "the particle should hang on the coarse side first";
+  refine(2);
+  ASSERT_TRUE(w.cloth.free(p));
+  for (int64_t q = 0; q < w.cloth.grid.n(); ++q) {
+    if (!w.cloth.free(q)) continue;
+    EXPECT_GE(clearance(contact.obstacle, w.cloth.x() + 3 * q), th * (1 - 1e-9)) << "particle " << q;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(w.cloth.x1[3 * q + k] - w.cloth.x2[3 * q + k], v[k] * dt, 1e-12) << "particle " << q;
+  }
+}
+
+// With the box given, a cloth that is flat on either side of the edge
+// coarsens there but not across the edge: the level-1 cells spanning it
+// would cut 5 mm into the box. Without it, everything merges.
+TEST(AmrcMesh, LeavesOverTheBoxEdgeStaySplit) {
+  const double still[3] = {0, 0, 0};
+  for (bool box : {true, false}) {
+    World w(edge_scene(), test_fabric());
+    drape_over_the_edge(w, still);
+    Amrc amrc(w.cloth, 2);
+    const Thresholds flat_everywhere{10.0, 5.0};  // no turn is sharp enough to split
+    for (int pass = 0; pass < 4; ++pass)
+      amrc.adapt(w.cloth, w.fabric.density, w.scene.cloth.shear, flat_everywhere, {},
+                 box ? &w.model.contact.obstacle : nullptr);
+    const Quadtree& t = amrc.tree();
+    ASSERT_TRUE(t.balanced());
+    for (int ci = 0; ci < kEdgeN - 1; ++ci)
+      for (int cj = 0; cj < kEdgeN - 1; ++cj) {
+        const int l = t.leaf_at(ci, cj).level;
+        if (!box) {
+          EXPECT_EQ(l, 2) << ci << "," << cj;
+        } else if (ci == 2 || ci == 3) {
+          EXPECT_EQ(l, 0) << ci << "," << cj << ": across the edge";
+        } else {
+          EXPECT_EQ(l, 1) << ci << "," << cj << ": beside the edge (2:1 with it)";
+        }
+      }
   }
 }
 

@@ -165,6 +165,35 @@ TEST(Contact, NoParticleEndsInsideTheBox) {
   EXPECT_GT(touching, 9) << "the cloth should have landed on the box";
 }
 
+// The safety net's projection is an inelastic contact: a particle that ended
+// 2 mm inside the box's top goes back onto it, keeps its motion along the top
+// and remembers none into it (and none out of it from the push); near the
+// floor as well, both parts go.
+TEST(Contact, ASettledParticleKeepsOnlyItsMotionAlongTheSurface) {
+  Obstacle box;
+  box.shape = ObstacleShape::Box;
+  box.half[0] = box.half[1] = box.half[2] = 0.2;
+  box.center[2] = 0.2;  // top at z = 0.4
+  box.floor = true;
+  double x[3] = {0.05, -0.1, 0.398}, dx[3] = {3e-4, -1e-4, -2.5e-3};
+  settle_on_surface(box, x, dx);
+  EXPECT_DOUBLE_EQ(x[2], 0.4);
+  EXPECT_DOUBLE_EQ(x[0], 0.05);
+  EXPECT_DOUBLE_EQ(x[1], -0.1);
+  EXPECT_DOUBLE_EQ(dx[0], 3e-4);
+  EXPECT_DOUBLE_EQ(dx[1], -1e-4);
+  EXPECT_EQ(dx[2], 0.0) << "no motion into the top is remembered";
+  double y[3] = {0.5, 0.1, -1e-3}, dy[3] = {2e-4, 0, -1e-3};  // below the floor, beside the box
+  settle_on_surface(box, y, dy);
+  EXPECT_DOUBLE_EQ(y[2], 0.0);
+  EXPECT_EQ(dy[2], 0.0);
+  EXPECT_DOUBLE_EQ(dy[0], 2e-4);
+  double u[3] = {0.1, 0.1, 0.45}, du[3] = {1e-3, 0, 1e-3};  // outside: untouched
+  settle_on_surface(box, u, du);
+  EXPECT_EQ(u[2], 0.45);
+  EXPECT_EQ(du[2], 1e-3);
+}
+
 // The box scene is its own mirror image across x = 0 (and y = 0), so the
 // drape must be too. Shear read at one corner per particle broke this: the
 // diagonal through that corner stayed soft and coarse drapes leaned along it.

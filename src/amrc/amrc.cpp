@@ -25,13 +25,23 @@ struct Corners {
   double w[4];
 };
 
-Corners corners_of(const Quadtree& t, int i, int j) {
-  const Cell c = t.leaf_at(std::min(i, t.ni() - 2), std::min(j, t.nj() - 2));
+Corners corners_in(const Quadtree& t, const Cell& c, int i, int j) {
   const int ie = t.i_end(c), je = t.j_end(c);
   const double u = double(i - c.i) / (ie - c.i), v = double(j - c.j) / (je - c.j);
   const int64_t nj = t.nj();
   return {{c.i * nj + c.j, ie * nj + c.j, c.i * nj + je, ie * nj + je},
           {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v}};
+}
+
+Corners corners_of(const Quadtree& t, int i, int j) {
+  return corners_in(t, t.leaf_at(std::min(i, t.ni() - 2), std::min(j, t.nj() - 2)), i, j);
+}
+
+void place(const Corners& k, const double* x, double* y) {
+  for (int a = 0; a < 3; ++a) {
+    y[a] = 0;
+    for (int q = 0; q < 4; ++q) y[a] += k.w[q] * x[3 * k.id[q] + a];
+  }
 }
 
 }  // namespace
@@ -40,8 +50,10 @@ Amrc::Amrc(const Cloth& c, int max_level)
     : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
   indicator_.assign(c.grid.n(), 0.0);
   speed_.assign(c.grid.n(), 0.0);
+  inside_.assign(c.grid.n(), 0.0);
   cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
   was_active_.assign(c.grid.n(), 0);
+  was_free_.assign(c.grid.n(), 0);
   edge_on_ = c.edge_on;
   triple_on_ = c.triple_on;
   shear_on_ = c.shear_on;
@@ -84,6 +96,24 @@ void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double
   });
 }
 
+void Amrc::inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<double>& out) const {
+  const double* x = c.x();
+  const int top = tree_.max_level();
+  per_particle(c, share, out, [&](int64_t p) {
+    const int i = c.grid.i_of(p), j = c.grid.j_of(p);
+    const int ci = std::min(i, c.grid.ni - 2), cj = std::min(j, c.grid.nj - 2);
+    auto cuts = [&](const Corners& k) {
+      double y[3];
+      place(k, x, y);
+      return clearance(ob, y) < 0;
+    };
+    unsigned mask = cuts(corners_of(tree_, i, j)) ? 1u : 0u;
+    for (int l = 1; l <= top; ++l)
+      if (cuts(corners_in(tree_, Cell{(ci >> l) << l, (cj >> l) << l, l}, i, j))) mask |= 1u << l;
+    return double(mask);
+  });
+}
+
 void Amrc::speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
   // x1 - x2 is the step the next prediction extrapolates (time_loop.cpp).
   per_particle(c, share, out, [&](int64_t p) {
@@ -102,7 +132,7 @@ void Amrc::apply(Cloth& c, double density, bool shear) const { apply_tree(tree_,
 void Amrc::lift_new_particles(Cloth& c, const Contact& contact) const {
   const Obstacle& ob = contact.obstacle;
   for (int64_t p = 0; p < c.grid.n(); ++p) {
-    if (was_active_[p] || !c.free(p)) continue;
+    if (was_free_[p] || !c.free(p)) continue;
     double* x = c.x() + 3 * p;
     if (clearance(ob, x) >= contact.thickness) continue;
     double y[3] = {x[0], x[1], x[2]};
@@ -122,35 +152,42 @@ void Amrc::fill_inactive(Cloth& c) const {
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < n; ++p) {
     if (c.active(p)) continue;
-    const Corners k = corners_of(tree_, c.grid.i_of(p), c.grid.j_of(p));
-    for (int a = 0; a < 3; ++a) {
-      double s = 0;
-      for (int q = 0; q < 4; ++q) s += k.w[q] * x[3 * k.id[q] + a];
-      x[3 * p + a] = s;
-    }
+    double y[3];
+    place(corners_of(tree_, c.grid.i_of(p), c.grid.j_of(p)), x, y);
+    for (int a = 0; a < 3; ++a) x[3 * p + a] = y[a];
   }
 }
 
-AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share) {
+AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share,
+                       const Obstacle* obstacle) {
   indicator(c, share, indicator_);
   if (th.coarsen_speed > 0) speeds(c, share, speed_);
+  const bool solid = obstacle && obstacle->shape != ObstacleShape::None;
+  if (solid) inside(c, *obstacle, share, inside_);
   old_ = tree_;
-  const AdaptStats st = drape::adapt(tree_, indicator_, th, cells_, th.coarsen_speed > 0 ? &speed_ : nullptr);
+  const AdaptStats st = drape::adapt(tree_, indicator_, th, cells_, th.coarsen_speed > 0 ? &speed_ : nullptr,
+                                     solid ? &inside_ : nullptr);
   if (st.refined == 0 && st.coarsened == 0) return st;
   carry_over(c, density, shear);
   return st;
 }
 
-void Amrc::set_uniform_level(Cloth& c, double density, bool shear, int level) {
+void Amrc::set_levels(Cloth& c, double density, bool shear, const std::vector<uint8_t>& levels) {
   old_ = tree_;
-  std::vector<uint8_t> levels(tree_.levels().size(), uint8_t(level));
   tree_.set_levels(levels);
   carry_over(c, density, shear);
 }
 
+void Amrc::set_uniform_level(Cloth& c, double density, bool shear, int level) {
+  set_levels(c, density, shear, std::vector<uint8_t>(tree_.levels().size(), uint8_t(level)));
+}
+
 void Amrc::carry_over(Cloth& c, double density, bool shear) {
   const int64_t n = c.grid.n();
-  for (int64_t p = 0; p < n; ++p) was_active_[p] = c.active(p);
+  for (int64_t p = 0; p < n; ++p) {
+    was_active_[p] = c.active(p);
+    was_free_[p] = c.free(p);
+  }
   // Newly active particles: positions and history on the old leaf's surface;
   // the forces of the slots they start, from the old corners' slots that were
   // on (forces are per unit width, so a split edge keeps its tension).

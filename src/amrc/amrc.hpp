@@ -36,6 +36,10 @@ class Amrc {
   // The criterion per particle: the largest turning angle (rad) of the mesh
   // lines through it, at its active triples; 0 elsewhere.
   void indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
+  // Per particle, where the mesh would place it inside the obstacle (the
+  // mask criterion.hpp's adapt takes): bit 0, on the leaf it lies in now;
+  // bit l, on the level-l cell round it, merged.
+  void inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<double>& out) const;
   // Each active particle's speed (m/s) as the next step starts; 0 elsewhere.
   void speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
 
@@ -43,18 +47,23 @@ class Amrc {
   // the state over and rebuilds the cloth's mesh (the caller rebuilds lists).
   // With several ranks each carries the state of its own particles (and of
   // its ghosts, which must be current, hanging ones included).
-  AdaptStats adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share = {});
+  // With an obstacle, no leaf's surface cuts into it (the floor, flat, never is).
+  AdaptStats adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share = {},
+                   const Obstacle* obstacle = nullptr);
 
-  // Grid sequencing (sequence.hpp): every leaf at `level`, the state carried
+  // The tree given as its finest intervals' leaf levels, the state carried
   // over as adapt() does. Between runs of time steps, like adapt().
+  void set_levels(Cloth& c, double density, bool shear, const std::vector<uint8_t>& levels);
+  // Grid sequencing (sequence.hpp): every leaf at `level`.
   void set_uniform_level(Cloth& c, double density, bool shear, int level);
 
   // Applies the current tree to the cloth (marks, topology, geometry, masses).
   void apply(Cloth& c, double density, bool shear) const;
 
   // Moves the particles the last adaptation made free out of the contact
-  // layer, with their history: on the old leaf's flat surface they may start
-  // inside it (the leaf spanned an edge of the box), with a violent force.
+  // layer, with their history: on the old leaf's flat surface (or its side,
+  // where they hung) they may start inside it (the leaf spanned an edge of
+  // the box), and the contact would throw them out at tens of m/s.
   void lift_new_particles(Cloth& c, const Contact& contact) const;
 
   // Puts inactive particles on the bilinear surface of their leaf.
@@ -65,9 +74,9 @@ class Amrc {
   void carry_over(Cloth& c, double density, bool shear);
 
   Quadtree tree_, old_;
-  std::vector<double> indicator_, speed_;
+  std::vector<double> indicator_, speed_, inside_;
   std::vector<Cell> cells_;  // adapt's scratch, reserved for every leaf
-  std::vector<uint8_t> was_active_, edge_on_, triple_on_, shear_on_;  // the old mesh's
+  std::vector<uint8_t> was_active_, was_free_, edge_on_, triple_on_, shear_on_;  // the old mesh's
 };
 
 }  // namespace drape

@@ -15,10 +15,20 @@ double largest(const Quadtree& t, const Cell& c, const std::vector<double>& indi
   return m;
 }
 
+// Whether a particle of cell c (closed) has any of `bits` in its inside mask.
+bool any_inside(const Quadtree& t, const Cell& c, const std::vector<double>* inside, unsigned bits) {
+  if (!inside) return false;
+  for (int i = c.i; i <= t.i_end(c); ++i)
+    for (int j = c.j; j <= t.j_end(c); ++j)
+      if (unsigned((*inside)[size_t(i) * t.nj() + j]) & bits) return true;
+  return false;
+}
+
 }  // namespace
 
 AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thresholds& th,
-                 std::vector<Cell>& snapshot, const std::vector<double>* speed) {
+                 std::vector<Cell>& snapshot, const std::vector<double>* speed,
+                 const std::vector<double>* inside) {
   if (!(th.coarsen < th.refine)) throw std::invalid_argument("amrc: the coarsen threshold must be below refine");
   // The indicator of leaves at `level` in the thresholds' units.
   auto scale = [&](int level) { return th.by_width ? std::ldexp(1.0, level - tree.max_level()) : 1.0; };
@@ -26,7 +36,8 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
   tree.leaves(snapshot);
   for (const Cell& c : snapshot) {
     const Cell now = tree.leaf_at(c.i, c.j);
-    if (now == c && tree.can_refine(c) && largest(tree, c, indicator) * scale(c.level) > th.refine) {
+    if (now == c && tree.can_refine(c) &&
+        (largest(tree, c, indicator) * scale(c.level) > th.refine || any_inside(tree, c, inside, 1u))) {
       tree.refine(c);
       ++st.refined;
     }
@@ -46,7 +57,7 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
     if (parent.i != c.i || parent.j != c.j) continue;  // visit each parent once, from its first child
     // The children's particles, measured at the children's spacing.
     if (tree.can_coarsen(parent) && largest(tree, parent, indicator) * scale(c.level) < th.coarsen &&
-        (!speed || largest(tree, parent, *speed) < th.coarsen_speed))
+        (!speed || largest(tree, parent, *speed) < th.coarsen_speed) && !any_inside(tree, parent, inside, 1u | 1u << l))
       snapshot[merges++] = parent;
   }
   for (size_t k = 0; k < merges; ++k) tree.coarsen(snapshot[k]);

@@ -29,8 +29,14 @@ struct Thresholds {
 // `scratch` holds the leaves (reserve (NI-1)(NJ-1) to adapt without allocating).
 // With `speed` (one value per particle), a cell merges only where every
 // particle is also slower than `coarsen_speed`.
+// With `inside` (one mask per particle, held in a double): bit 0 set, the
+// mesh places the particle inside an obstacle, and every leaf holding it
+// splits (and no cell holding it merges); bit l set, merging the level-l
+// cell round it would, and the cell stays split. A leaf spanning a box's edge cuts through the box with its
+// flat surface; split later, its particles would start deep inside.
 AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thresholds& th,
-                 std::vector<Cell>& scratch, const std::vector<double>* speed = nullptr);
+                 std::vector<Cell>& scratch, const std::vector<double>* speed = nullptr,
+                 const std::vector<double>* inside = nullptr);
 inline AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen) {
   std::vector<Cell> scratch;
   return adapt(tree, indicator, Thresholds{refine, coarsen}, scratch);

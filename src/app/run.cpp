@@ -299,7 +299,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
       const Thresholds th{scene.amrc.refine, scene.amrc.coarsen, scene.amrc.coarsen_speed,
                           scene.amrc.indicator == AmrcIndicator::Deflection};
-      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, th, {&tiling, &dec.owned, &red});
+      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, th, {&tiling, &dec.owned, &red},
+                      &model.contact.obstacle);
     }
     sum.refined += a.refined;
     sum.coarsened += a.coarsened;

@@ -118,6 +118,22 @@ bool push_out(const Obstacle& o, double clearance, double* x) {
   return moved;
 }
 
+void settle_on_surface(const Obstacle& o, double* x, double* dx) {
+  auto settle = [&](double d, const double* n) {  // inside by -d along the outward normal n
+    for (int k = 0; k < 3; ++k) x[k] -= d * n[k];
+    const double into = dx[0] * n[0] + dx[1] * n[1] + dx[2] * n[2];
+    if (into < 0)
+      for (int k = 0; k < 3; ++k) dx[k] -= into * n[k];
+  };
+  double n[3];
+  const double d = o.shape == ObstacleShape::Box      ? box_distance(o, x, n, nullptr)
+                   : o.shape == ObstacleShape::Sphere ? sphere_distance(o, x, n, nullptr)
+                                                      : 0.0;
+  if (d < 0) settle(d, n);
+  const double up[3] = {0, 0, 1};
+  if (o.floor && x[2] < o.floor_z) settle(x[2] - o.floor_z, up);
+}
+
 double clearance(const Obstacle& o, const double* x) {
   double n[3], d = 1e300;
   if (o.shape == ObstacleShape::Box) d = box_distance(o, x, n, nullptr);

@@ -167,17 +167,19 @@ void TimeLoop::accept(StepStats& st) {
   for (int64_t k = 0; k < L.size(); ++k) {
     const int64_t p = L.items[k];
     double* xp = x + 3 * p;
-    // Safety net: a particle that ended inside an obstacle is put back on its surface.
+    double dx[3];
+    for (int i = 0; i < 3; ++i) dx[i] = xp[i] - c_.x1[3 * p + i];
+    // Safety net: a particle that ended inside an obstacle is put back on its
+    // surface, and remembers no speed into it nor any from the push.
     if (penetration(ob, xp) > 0) {
-      push_out(ob, 0.0, xp);
+      settle_on_surface(ob, xp, dx);
       ++pushed;
     }
     double v2 = 0;
     for (int i = 0; i < 3; ++i) {
       const int64_t u = 3 * p + i;
-      const double dx = x[u] - c_.x1[u];
-      v2 += dx * dx;
-      c_.x2[u] = x[u] - (1.0 - damp) * dx;  // damping shortens the remembered velocity
+      v2 += dx[i] * dx[i];
+      c_.x2[u] = x[u] - (1.0 - damp) * dx[i];  // damping shortens the remembered velocity
       c_.x1[u] = x[u];
     }
     vmax = std::max(vmax, std::sqrt(v2) / c_.dt);
