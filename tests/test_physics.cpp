@@ -188,6 +188,14 @@ TEST(Contact, ASettledParticleKeepsOnlyItsMotionAlongTheSurface) {
   EXPECT_DOUBLE_EQ(y[2], 0.0);
   EXPECT_EQ(dy[2], 0.0);
   EXPECT_DOUBLE_EQ(dy[0], 2e-4);
+  // Inside the wall by 1 mm, 0.5 mm above the floor the box stands on: out
+  // through the wall, not down through the bottom into the floor.
+  double w[3] = {0.199, 0.0, 5e-4}, dw[3] = {-1e-3, 0, 2e-4};  // moving in through the wall
+  settle_on_surface(box, w, dw);
+  EXPECT_DOUBLE_EQ(w[0], 0.2);
+  EXPECT_DOUBLE_EQ(w[2], 5e-4);
+  EXPECT_EQ(dw[0], 0.0);
+  EXPECT_DOUBLE_EQ(dw[2], 2e-4);
   double u[3] = {0.1, 0.1, 0.45}, du[3] = {1e-3, 0, 1e-3};  // outside: untouched
   settle_on_surface(box, u, du);
   EXPECT_EQ(u[2], 0.45);

@@ -19,7 +19,7 @@ double turning_angle(const double* a, const double* b, const double* c) {
   return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
 }
 
-// The leaf of `t` holding particle (i, j) and p's bilinear weights on its corners.
+// A cell's corners and particle (i, j)'s bilinear weights on them.
 struct Corners {
   int64_t id[4];
   double w[4];
@@ -105,7 +105,7 @@ void Amrc::inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, s
     auto cuts = [&](const Corners& k) {
       double y[3];
       place(k, x, y);
-      return clearance(ob, y) < 0;
+      return clearance(ob, y) < -1e-9;  // a nanometre: a particle settled on a face may sit an ulp inside
     };
     unsigned mask = cuts(corners_of(tree_, i, j)) ? 1u : 0u;
     for (int l = 1; l <= top; ++l)

@@ -17,8 +17,10 @@ bool Quadtree::can_coarsen(const Cell& parent) const {
   return ok;
 }
 
-void Quadtree::coarsen(const Cell& parent) {
-  if (can_coarsen(parent)) set_level(parent, parent.level);
+bool Quadtree::coarsen(const Cell& parent) {
+  if (!can_coarsen(parent)) return false;
+  set_level(parent, parent.level);
+  return true;
 }
 
 }  // namespace drape

@@ -60,8 +60,7 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
         (!speed || largest(tree, parent, *speed) < th.coarsen_speed) && !any_inside(tree, parent, inside, 1u | 1u << l))
       snapshot[merges++] = parent;
   }
-  for (size_t k = 0; k < merges; ++k) tree.coarsen(snapshot[k]);
-  st.coarsened = int(merges);
+  for (size_t k = 0; k < merges; ++k) st.coarsened += tree.coarsen(snapshot[k]) ? 1 : 0;
   return st;
 }
 

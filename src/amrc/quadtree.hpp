@@ -63,7 +63,7 @@ class Quadtree {
   // --- coarsen.cpp: merge the children of `parent` (all leaves one level
   // finer) when no neighbour is finer than they are, so balance holds.
   bool can_coarsen(const Cell& parent) const;
-  void coarsen(const Cell& parent);
+  bool coarsen(const Cell& parent);  // false (and no change) where it cannot
 
   // 2:1 balance across every leaf side.
   bool balanced() const;

@@ -15,10 +15,15 @@ double box_distance(const Obstacle& o, const double* x, double* n, double* hess)
   if (hess) std::fill(hess, hess + 9, 0.0);
   const double qmax = std::max({q[0], q[1], q[2]});
   if (qmax <= 0) {  // inside: nearest face decides, flat there
-    const int k = int(std::max_element(q, q + 3) - q);
+    // A bottom standing on the floor is no way out: out through it is into
+    // the floor, which pushes back, and the particle would stay inside.
+    const bool on_floor = o.floor && o.center[2] - o.half[2] <= o.floor_z;
+    int k = 0;
+    for (int a = 1; a < 3; ++a)
+      if (q[a] > q[k] && !(a == 2 && s[2] < 0 && on_floor)) k = a;
     n[0] = n[1] = n[2] = 0;
     n[k] = s[k];
-    return qmax;
+    return q[k];
   }
   double o3[3], d2 = 0;
   for (int k = 0; k < 3; ++k) {
