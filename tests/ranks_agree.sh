@@ -6,10 +6,15 @@
 # least once. The Newton case runs with the KES reversal and air drag on, so
 # the step-start anchors of the ring's elements read the ghosts too. The
 # amrc_speed case adds amrc.coarsen_speed, whose speeds each rank computes
-# for its own particles only: it must hold back some merges.
-# Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
+# for its own particles only: it must hold back some merges. The amrc_edges
+# case starts on coarse deflection leaves, so that leaves across the box's
+# edges cut into it and split for that (the inside mask, which each rank
+# computes for its own particles): it must do so at least once.
+# Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR [CASES]
+# (CASES: some of the cases below, space-separated; default all but amrc_edges,
+# which ctest runs as a test of its own)
 set -euo pipefail
-drape=$1 mpiexec=$2 src=$3 work=$4
+drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
 sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
@@ -18,12 +23,15 @@ amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set so
 # take thousands of steps to rest).
 sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
           --set 'obstacle.shape="none"' --set cloth.height=0.016)
-for method in newton cg amrc amrc_speed sequence; do
+edges=(--set 'amrc.indicator="deflection"' --set amrc.refine=0.5 --set amrc.coarsen=0.1
+       --set amrc.start_spacing=0.05 --set solver.steps=120 --set output.every=40)
+for method in $cases; do
   args=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
         --set solver.steps=40 --set output.every=10 --quiet)
   case $method in
     amrc) args+=("${amrc[@]}") ;;
     amrc_speed) args+=("${amrc[@]}" --set amrc.coarsen_speed=0.01) ;;
+    amrc_edges) args+=("${amrc[@]}" "${edges[@]}") ;;
     sequence) args+=("${sequence[@]}") ;;
     *) args+=(--set solver.method=$method) ;;
   esac
@@ -52,6 +60,11 @@ for method in newton cg amrc amrc_speed sequence; do
     held=$(merges "$work/amrc_speed-1") free=$(merges "$work/amrc-1")
     (( held < free )) || { echo "amrc_speed: $held merges, not fewer than $free without the speed condition"; exit 1; }
     echo "amrc_speed: $held merges against $free without the speed condition"
+  fi
+  if [[ $method == amrc_edges ]]; then
+    cut=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["amrc"]["refined_inside"])' "$work/$method-1/report.json")
+    (( cut > 0 )) || { echo "amrc_edges: no leaf split for cutting into the box: the case does not cover the inside mask"; exit 1; }
+    echo "amrc_edges: $cut leaf split(s) for cutting into the box"
   fi
   if [[ $method == sequence ]]; then
     stages=$(python3 -c 'import json,sys; print(" ".join("%d@%d" % (g["level"], g["from_step"]) for g in json.load(open(sys.argv[1]))["stages"]))' \

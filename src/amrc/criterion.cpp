@@ -36,10 +36,12 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
   tree.leaves(snapshot);
   for (const Cell& c : snapshot) {
     const Cell now = tree.leaf_at(c.i, c.j);
-    if (now == c && tree.can_refine(c) &&
-        (largest(tree, c, indicator) * scale(c.level) > th.refine || any_inside(tree, c, inside, 1u))) {
+    if (!(now == c) || !tree.can_refine(c)) continue;
+    const bool bent = largest(tree, c, indicator) * scale(c.level) > th.refine;
+    if (bent || any_inside(tree, c, inside, 1u)) {
       tree.refine(c);
       ++st.refined;
+      st.refined_inside += bent ? 0 : 1;
     }
   }
   // Merges are judged on the tree as this sweep found it, then made: made one

@@ -10,6 +10,7 @@ namespace drape {
 
 struct AdaptStats {
   int refined = 0, coarsened = 0;
+  int refined_inside = 0;  // of `refined`, the splits the inside mask alone asked for
 };
 
 // AmrcSpec's values as the criterion reads them (no defaults of its own: a

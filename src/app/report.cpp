@@ -57,6 +57,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("enabled", scene.amrc.enabled)
       .value("refined", (long long)s.refined)
       .value("coarsened", (long long)s.coarsened)
+      .value("refined_inside", (long long)s.refined_inside)
       .value("start_spacing", scene.amrc.start_spacing)
       .end_object();
   // Grid sequencing: each uniform mesh, from the step it took over at.

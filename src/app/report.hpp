@@ -41,6 +41,7 @@ struct Summary {
   DecompStats decomp;
   int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
   int64_t refined = 0, coarsened = 0;                         // AMRC operations
+  int64_t refined_inside = 0;  // of `refined`, leaves split for cutting into the obstacle
   std::vector<Rebalance> rebalances;                          // after AMRC, several ranks
   // Grid sequencing: where each uniform mesh took over.
   struct Stage {

@@ -304,6 +304,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     sum.refined += a.refined;
     sum.coarsened += a.coarsened;
+    sum.refined_inside += a.refined_inside;
     if (a.refined != 0 || a.coarsened != 0) mesh_changed();
   };
   // Grid sequencing: the cloth at rest on a coarse mesh goes on on the next finer one.
