@@ -106,12 +106,19 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
   return hit;
 }
 
+namespace {
+// Signed distance to the box or sphere and its outward normal n; far (1e300) without one.
+double shape_distance(const Obstacle& o, const double* x, double* n) {
+  if (o.shape == ObstacleShape::Box) return box_distance(o, x, n, nullptr);
+  if (o.shape == ObstacleShape::Sphere) return sphere_distance(o, x, n, nullptr);
+  return 1e300;
+}
+}  // namespace
+
 bool push_out(const Obstacle& o, double clearance, double* x) {
   bool moved = false;
   double n[3];
-  double d = o.shape == ObstacleShape::Box      ? box_distance(o, x, n, nullptr)
-             : o.shape == ObstacleShape::Sphere ? sphere_distance(o, x, n, nullptr)
-                                                : clearance;
+  const double d = shape_distance(o, x, n);
   if (d < clearance) {
     for (int k = 0; k < 3; ++k) x[k] += (clearance - d) * n[k];
     moved = true;
@@ -131,28 +138,20 @@ void settle_on_surface(const Obstacle& o, double* x, double* dx) {
       for (int k = 0; k < 3; ++k) dx[k] -= into * n[k];
   };
   double n[3];
-  const double d = o.shape == ObstacleShape::Box      ? box_distance(o, x, n, nullptr)
-                   : o.shape == ObstacleShape::Sphere ? sphere_distance(o, x, n, nullptr)
-                                                      : 0.0;
+  const double d = shape_distance(o, x, n);
   if (d < 0) settle(d, n);
   const double up[3] = {0, 0, 1};
   if (o.floor && x[2] < o.floor_z) settle(x[2] - o.floor_z, up);
 }
 
 double clearance(const Obstacle& o, const double* x) {
-  double n[3], d = 1e300;
-  if (o.shape == ObstacleShape::Box) d = box_distance(o, x, n, nullptr);
-  if (o.shape == ObstacleShape::Sphere) d = sphere_distance(o, x, n, nullptr);
-  if (o.floor) d = std::min(d, x[2] - o.floor_z);
-  return d;
+  double n[3];
+  const double d = shape_distance(o, x, n);
+  return o.floor ? std::min(d, x[2] - o.floor_z) : d;
 }
 
 double penetration(const Obstacle& o, const double* x) {
-  double n[3], depth = 0;
-  if (o.shape == ObstacleShape::Box) depth = std::max(depth, -box_distance(o, x, n, nullptr));
-  if (o.shape == ObstacleShape::Sphere) depth = std::max(depth, -sphere_distance(o, x, n, nullptr));
-  if (o.floor) depth = std::max(depth, o.floor_z - x[2]);
-  return depth;
+  return std::max(0.0, -clearance(o, x));
 }
 
 }  // namespace drape
