@@ -57,18 +57,23 @@ def main():
                 "quality_error_cost": (r["final_cost"]["total"] - ref_cost) / ref_cost if ref_cost else 0.0,
                 "quality_error_geometric": rms, "max_penetration": r["max_penetration"],
                 "simulated_seconds": r["simulated_seconds"], "steps": r["steps"], "at_rest": r["at_rest"],
+                # kinks at the mesh spacing in the final state (reports before it existed: none)
+                "zigzag_share": r.get("zigzag", {}).get("share"),
             })
     json.dump({"rows": rows}, open(f"{out}/table1.json", "w"), indent=1)
-    print("%-5s %-9s %10s %8s %8s %15s %8s %12s %12s %12s" % (
-        "size", "mesh", "grid", "wall [s]", "t [s]", "particles", "mean", "cost err", "geom err", "penetr. [m]"))
+    print("%-5s %-9s %10s %8s %8s %15s %8s %12s %12s %12s %7s" % (
+        "size", "mesh", "grid", "wall [s]", "t [s]", "particles", "mean", "cost err", "geom err", "penetr. [m]",
+        "zigzag"))
     for r in rows:
         parts = str(r["particles_min"]) if r["particles_min"] == r["particles_max"] else \
             "%d-%d" % (r["particles_min"], r["particles_max"])
-        print("%-5d %-9s %10s %8.1f %8.3f%s %15s %8.0f %+12.3f %12.4f %12.2g" % (
+        zz = "-" if r["zigzag_share"] is None else "%.3f" % r["zigzag_share"]
+        print("%-5d %-9s %10s %8.1f %8.3f%s %15s %8.0f %+12.3f %12.4f %12.2g %7s" % (
             r["size"], r["mesh"], "%dx%d" % tuple(r["grid"]), r["wall_seconds"], r["simulated_seconds"],
             "*" if r["at_rest"] else " ", parts, r["particles_mean"],
-            r["quality_error_cost"], r["quality_error_geometric"], r["max_penetration"]))
-    print("(t: simulated seconds, * at rest; mean: active particles per CG iteration)")
+            r["quality_error_cost"], r["quality_error_geometric"], r["max_penetration"], zz))
+    print("(t: simulated seconds, * at rest; mean: active particles per CG iteration; zigzag: share of\n"
+          " neighbouring turns on the mesh lines that kink at the mesh spacing, report.json zigzag)")
     for size in sorted({r["size"] for r in rows}):
         f, a, c = (next(r for r in rows if r["size"] == size and r["mesh"] == m)
                    for m in ("finest", "AMRC", "coarsest"))

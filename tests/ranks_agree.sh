@@ -17,6 +17,8 @@ set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
 sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
+# The final state's kinks (report.json zigzag), counted by each rank over its own particles.
+zz() { python3 -c 'import json,sys; z=json.load(open(sys.argv[1]))["zigzag"]; print(z["pairs"], z["zigzags"])' "$1/report.json"; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
 # A cloth let down onto the floor just inside the contact layer: at rest on
 # its coarse mesh after a few steps, then split (the drape over the box would
@@ -44,6 +46,8 @@ for method in $cases; do
     one=$(sum "$work/$method-1") many=$(sum "$work/$method-$n")
     [[ -n $one && $one == "$many" ]] || { echo "$method: checksums differ: 1 rank $one, $n ranks $many"; exit 1; }
     grep -q "\"ranks\": $n" "$work/$method-$n/report.json" || { echo "the report does not say $n ranks"; exit 1; }
+    [[ $(zz "$work/$method-1") == $(zz "$work/$method-$n") ]] ||
+      { echo "$method: zigzag counts (pairs, zigzags) differ: 1 rank $(zz "$work/$method-1"), $n ranks $(zz "$work/$method-$n")"; exit 1; }
     h5diff "$work/$method-1/drape.h5" "$work/$method-$n/drape.h5" /frames /frames ||
       { echo "$method: drape.h5 frames differ between 1 and $n ranks"; exit 1; }
     if [[ $method == amrc ]]; then

@@ -44,11 +44,17 @@ class Progress {
     std::fflush(stdout);
   }
 
-  void finish(bool at_rest, double penetration) {
+  void finish(bool at_rest, double penetration, double zigzag_share) {
     if (!on_) return;
     std::printf("done in %s: cloth %s, deepest penetration %.3g m\n",
                 clock_text(seconds(start_, clock::now())).c_str(),
                 at_rest ? "at rest" : "still moving", penetration);
+    // A few kinks are folds caught between particles; many mean the mesh
+    // spacing itself shapes the drape (see solver/zigzag.hpp).
+    if (zigzag_share > 0.05)
+      std::printf("note: %.1f %% of the mesh lines' neighbouring turns zigzag (kinks at the mesh spacing):\n"
+                  "      there the shape depends on the mesh, and a finer one will differ\n",
+                  100 * zigzag_share);
   }
 
  private:

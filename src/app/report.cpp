@@ -101,6 +101,12 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("rest_speed", scene.solver.rest_speed);
   j.value("max_penetration", penetration_depth);
   j.value("projections", (long long)n.projections);
+  j.begin_object("zigzag")
+      .value("share", s.zigzag.share())
+      .value("pairs", (long long)s.zigzag.pairs)
+      .value("zigzags", (long long)s.zigzag.zigzags)
+      .value("min_turn", kZigzagTurn)
+      .end_object();
   j.value("total_mass", cloth.total_mass());
   j.value("wall_seconds", wall);
   j.begin_object("phases");

@@ -16,6 +16,7 @@
 #include "solver/scene.hpp"
 #include "solver/time_loop.hpp"
 #include "solver/timers.hpp"
+#include "solver/zigzag.hpp"
 
 namespace drape {
 
@@ -53,6 +54,7 @@ struct Summary {
   std::vector<Stage> stages;
   int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)
   bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
+  Zigzag zigzag;                    // kinks at the mesh spacing in the final state
 };
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);

@@ -396,6 +396,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                       threads);
   sum.decomp = decomp_stats(dec, tiling, comm);
   const double depth = max_penetration(cloth, model, lists, red);
+  sum.zigzag = count_zigzags(cloth, lists.particles.items, red);
   settle_for_output();
   const Checksum ck = state_checksum(cloth, tiling, owned, red);
   {
@@ -412,7 +413,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                           report_json(scene, fabric, cloth, sum, tm, wall, ranks, threads, ck.hex(),
                                       depth, loop.free_particles()));
     if (!opt.quiet) {
-      progress.finish(sum.at_rest, depth);
+      progress.finish(sum.at_rest, depth, sum.zigzag.share());
       print_timing_table(tm, wall, ck.hex(), sum.decomp, ranks);
       print_table2(sum.table2, threads);
     }

@@ -3,6 +3,7 @@
 // owned tile; the result is the sum over all tiles in tile order, bitwise the
 // same for any number of ranks and threads. The MPI version lives in
 // src/decomp/; physics only sees this interface.
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
