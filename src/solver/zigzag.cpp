@@ -4,6 +4,10 @@
 
 namespace drape {
 
+namespace {
+
+// The turn of the mesh line through p along d: the change of its unit
+// tangent, whose length is about the turning angle.
 void line_turn(const Cloth& c, int64_t p, int d, double* out) {
   const double* x = c.x();
   const double *a = x + 3 * c.prev[d][p], *b = x + 3 * p, *n = x + 3 * c.next[d][p];
@@ -18,6 +22,8 @@ void line_turn(const Cloth& c, int64_t p, int d, double* out) {
   lv = std::sqrt(lv);
   for (int k = 0; k < 3; ++k) out[k] = (lu > 0 && lv > 0) ? v[k] / lv - u[k] / lu : 0.0;
 }
+
+}  // namespace
 
 Zigzag count_zigzags(const Cloth& c, const std::vector<int64_t>& particles, const Reducer& red,
                      double min_turn) {
