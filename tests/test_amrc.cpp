@@ -301,12 +301,7 @@ namespace {
 TEST(AmrcMesh, InternalForcesCancelWithHangingParticles) {
   Scene s = flat_scene(13, 11, 0.12, 0.10);
   World w(s, test_fabric());
-  Quadtree t(13, 11, 2);
-  const std::vector<double> flat(13 * 11, 0.0);
-  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
-  t.refine(t.leaf_at(5, 4));
-  t.refine(t.leaf_at(4, 4));
-  w.tree = t;
+  w.tree = mixed_tree();
   w.rebuild();
   ASSERT_GE(w.lists.hanging.size(), 4u);
   std::mt19937_64 rng(3);

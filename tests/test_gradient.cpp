@@ -24,12 +24,8 @@ struct Term {
 // A mesh with coarse leaves, fine leaves and hanging particles between them
 // (some on sides clipped at the far border).
 Quadtree amrc_tree() {
-  Quadtree t(13, 11, 2);
-  const std::vector<double> flat(13 * 11, 0.0);
-  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
-  t.refine(t.leaf_at(5, 4));
+  Quadtree t = mixed_tree();
   t.refine(t.leaf_at(9, 9));
-  t.refine(t.leaf_at(4, 4));
   return t;
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <random>
 
+#include "amrc/criterion.hpp"
 #include "solver/world.hpp"
 
 namespace drape::test {
@@ -16,6 +17,17 @@ inline Scene flat_scene(int ni, int nj, double size_i, double size_j) {
   s.obstacle.shape = ObstacleShape::None;
   s.obstacle.floor = false;
   return s;
+}
+
+// A 13 x 11 quadtree with leaves of levels 0 to 2 and hanging particles
+// between them (some on sides clipped at the far border).
+inline Quadtree mixed_tree() {
+  Quadtree t(13, 11, 2);
+  const std::vector<double> flat(13 * 11, 0.0);
+  for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
+  t.refine(t.leaf_at(5, 4));
+  t.refine(t.leaf_at(4, 4));
+  return t;
 }
 
 // A denim-like fabric (KES denim A values in SI) that needs no data file.

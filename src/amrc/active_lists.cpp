@@ -178,6 +178,40 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
   build_ring(ring, 1, shear, out.ring_shears);
 }
 
+namespace {
+// Shear cells: the leaves, each on the slot of its lower corner. Without a
+// tree, the finest cells whose four sides are mesh edges.
+void rebuild_cells(Cloth& c, bool shear_enabled, const Quadtree* tree) {
+  const Grid& g = c.grid;
+  for (int k = 0; k < 3; ++k) {
+    c.cell[k].assign(g.n(), -1);  // same sizes during a run: no allocation
+    c.corner_of[k].assign(g.n(), -1);
+  }
+  c.shear_on.assign(g.n(), 0);
+  if (!shear_enabled) return;
+  auto put = [&](int64_t s, int64_t a, int64_t b, int64_t d) {
+    c.shear_on[s] = 1;
+    const int64_t corner[3] = {a, b, d};
+    for (int k = 0; k < 3; ++k) {
+      c.cell[k][s] = corner[k];
+      c.corner_of[k][corner[k]] = s;
+    }
+  };
+  if (tree) {
+    tree->for_each_leaf([&](const Cell& l) {
+      const int ie = tree->i_end(l), je = tree->j_end(l);
+      put(g.id(l.i, l.j), g.id(ie, l.j), g.id(l.i, je), g.id(ie, je));
+    });
+    return;
+  }
+  for (int64_t s = 0; s < g.n(); ++s) {
+    const int64_t a = c.next[0][s], b = c.next[1][s];
+    if (!c.active(s) || a != s + g.nj || b != s + 1) continue;
+    if (c.next[1][a] == a + 1 && c.next[0][b] == b + g.nj) put(s, a, b, a + 1);
+  }
+}
+}  // namespace
+
 void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
   const Grid& g = c.grid;
   for (int d = 0; d < 2; ++d) {
@@ -215,9 +249,8 @@ void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
       c.edge_on[2 * p + d] = on && c.next[d][p] >= 0;
       c.triple_on[2 * p + d] = on && c.next[d][p] >= 0 && c.prev[d][p] >= 0;
     }
-    int64_t ids[5];
-    c.shear_on[p] = shear_enabled && on && shear_quadrants(shear_arms(c, p, ids)) > 0;
   }
+  rebuild_cells(c, shear_enabled, tree);
 }
 
 }  // namespace drape
@@ -252,10 +285,10 @@ void rebuild_geometry(Cloth& c, double density) {
       c.triple_rest[s] = c.triple_on[s] ? ext[d] : 0;
       c.triple_width[s] = c.triple_on[s] ? ext[1 - d] : 0;
     }
-    // A cross stands for the particle's own area, a quarter of each cell
-    // around it (as its mass does).
-    c.shear_area[p] = c.shear_on[p] ? ext[0] * ext[1] : 0;
-    c.shear_rest[p] = c.shear_on[p] ? std::sqrt(ext[0] * ext[1]) : 0;
+    // A cell stands for its own area.
+    const double area = c.shear_on[p] ? double(c.cell[0][p] - p) / g.nj * g.hi * double(c.cell[1][p] - p) * g.hj : 0;
+    c.shear_area[p] = area;
+    c.shear_rest[p] = std::sqrt(area);
   }
 }
 

@@ -182,6 +182,27 @@ void Amrc::set_uniform_level(Cloth& c, double density, bool shear, int level) {
   set_levels(c, density, shear, std::vector<uint8_t>(tree_.levels().size(), uint8_t(level)));
 }
 
+// A new leaf's shear force (N/m, per unit width) is the area mean of the old
+// leaves' over it: a split child keeps its parent's, a merged parent takes its
+// children's mean. Each old leaf lies in one new leaf, so writing a new
+// leaf's origin slot never changes what another new leaf reads.
+void Amrc::carry_shear(Cloth& c) const {
+  double* f = c.shear();
+  tree_.for_each_leaf([&](const Cell& l) {
+    const int ie = tree_.i_end(l), je = tree_.j_end(l);
+    double sum = 0;
+    int count = 0;
+    for (int ci = l.i; ci < ie; ++ci)
+      for (int cj = l.j; cj < je; ++cj) {
+        const Cell o = old_.leaf_at(ci, cj);
+        const int64_t s = c.grid.id(o.i, o.j);
+        if (shear_on_[s]) sum += f[s];
+        count += shear_on_[s];
+      }
+    f[c.grid.id(l.i, l.j)] = count > 0 ? sum / count : 0.0;
+  });
+}
+
 void Amrc::carry_over(Cloth& c, double density, bool shear) {
   const int64_t n = c.grid.n();
   for (int64_t p = 0; p < n; ++p) {
@@ -194,6 +215,7 @@ void Amrc::carry_over(Cloth& c, double density, bool shear) {
   edge_on_ = c.edge_on;  // same sizes: copies without allocating
   triple_on_ = c.triple_on;
   shear_on_ = c.shear_on;
+  carry_shear(c);
   apply(c, density, shear);
   const Layout& L = c.layout;
   for (int64_t p = 0; p < n; ++p) {
@@ -223,7 +245,6 @@ void Amrc::carry_over(Cloth& c, double density, bool shear) {
     };
     carry(L.tension(), 2, edge_on_);
     carry(L.moment(), 2, triple_on_);
-    carry(L.shear(), 1, shear_on_);
   }
 }
 

@@ -72,6 +72,7 @@ class Amrc {
  private:
   // After tree_ changed from old_: the new mesh, with the state carried over.
   void carry_over(Cloth& c, double density, bool shear);
+  void carry_shear(Cloth& c) const;
 
   Quadtree tree_, old_;
   std::vector<double> indicator_, speed_, inside_;

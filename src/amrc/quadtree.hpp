@@ -45,6 +45,15 @@ class Quadtree {
   // The leaf level over every finest interval (checkpoints); set_levels
   // takes such an array back (it must describe a balanced tree).
   const std::vector<uint8_t>& levels() const { return level_; }
+  // Calls f(leaf) for every leaf, row by row (no allocation).
+  template <class F>
+  void for_each_leaf(F&& f) const {
+    for (int ci = 0; ci < ni_ - 1; ++ci)
+      for (int cj = 0; cj < nj_ - 1; ++cj) {
+        const Cell c = leaf_at(ci, cj);
+        if (c.i == ci && c.j == cj) f(c);  // the leaf's first interval
+      }
+  }
   void set_levels(const std::vector<uint8_t>& levels);
 
   // The leaf over finest interval (ci, cj).
@@ -100,14 +109,6 @@ class Quadtree {
 
  private:
   bool is_leaf(const Cell& c) const;
-  template <class F>
-  void for_each_leaf(F&& f) const {
-    for (int ci = 0; ci < ni_ - 1; ++ci)
-      for (int cj = 0; cj < nj_ - 1; ++cj) {
-        const Cell c = leaf_at(ci, cj);
-        if (c.i == ci && c.j == cj) f(c);  // the leaf's first interval
-      }
-  }
   void set_level(const Cell& c, int level);
   // The finest intervals along the cell's four sides, just outside it.
   template <class F>

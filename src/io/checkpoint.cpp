@@ -26,7 +26,7 @@ using namespace h5;
 namespace {
 
 const char* const kFormat = "drape checkpoint";
-const int64_t kFormatVersion = 3;  // 2: counters gained particle_iterations; 3: shear read on crosses
+const int64_t kFormatVersion = 4;  // 2: counters gained particle_iterations; 3: shear read on crosses; 4: on cells
 
 // ------------------------------------------------------------ the digest --
 

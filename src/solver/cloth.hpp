@@ -3,7 +3,7 @@
 // particle p = i*NJ + j; element slots hang off their first particle:
 //   edge   slot 2p+d: p -> next particle along direction d (0 warp/i, 1 weft/j)
 //   triple slot 2p+d: prev -> p -> next along d (bending at p)
-//   shear  slot p   : the cross of p's four arms (next and prev along i and j)
+//   shear  slot p   : the cell (a leaf of the active mesh) whose lower corner is p
 // AMRC switches slots on and off; nothing is reallocated during a run.
 //
 // The unknowns live in one vector z = [x (3N) | tension (2N) | moment (2N) |
@@ -55,10 +55,14 @@ struct Cloth {
   std::vector<int64_t> next[2], prev[2];
   // Element slot switches (1 = active element).
   std::vector<uint8_t> edge_on, triple_on, shear_on;
+  // Shear cells: cell[k][s] is corner k+1 of slot s's cell (k = 0: along i
+  // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k][p]
+  // is the slot whose corner k+1 p is (at most one: the leaves tile the cloth).
+  std::vector<int64_t> cell[3], corner_of[3];
   // Per triple: the bending reference axis (unit, 3 per slot), frozen for a step.
   std::vector<double> bend_axis;
   // Rest geometry per slot, from the active mesh: rest length and the width
-  // (edges, triples) or area (shear crosses) the element stands for.
+  // (edges, triples) or area (shear cells) the element stands for.
   std::vector<double> edge_rest, edge_width, triple_rest, triple_width, shear_area, shear_rest;
   double time = 0, dt = 1e-3, dt_prev = 1e-3;
   int step = 0;
@@ -77,16 +81,10 @@ struct Cloth {
   double total_mass() const;
 };
 
-// A shear cross at particle s: ids = [s, next_i, prev_i, next_j, prev_j],
-// an absent arm given as s itself. Returns the arms present as bits 1-4.
-inline unsigned shear_arms(const Cloth& c, int64_t s, int64_t ids[5]) {
-  const int64_t nb[5] = {s, c.next[0][s], c.prev[0][s], c.next[1][s], c.prev[1][s]};
-  unsigned arms = 0;
-  for (int k = 0; k < 5; ++k) {
-    ids[k] = nb[k] >= 0 ? nb[k] : s;
-    if (k > 0 && nb[k] >= 0) arms |= 1u << k;
-  }
-  return arms;
+// A shear cell at slot s: ids = [s, along i, along j, across] (on slots only).
+inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
+  ids[0] = s;
+  for (int k = 0; k < 3; ++k) ids[k + 1] = c.cell[k][s];
 }
 
 }  // namespace drape

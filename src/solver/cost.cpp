@@ -5,7 +5,7 @@
 #include <cstring>
 
 #include "solver/kernels.hpp"
-#include "solver/shear_cross.hpp"
+#include "solver/shear_cell.hpp"
 
 namespace drape {
 
@@ -87,12 +87,12 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
 }
 
 void Evaluator::shear_forces(int64_t s, const double* z) {
-  const CrossAt a = cross_at(c_, z, s);
-  V g[5];
-  const double phi = shear_cross(a.x, a.arms, g);
+  const CellAt a = cell_at(c_, z, s);
+  V g[4];
+  const double phi = shear_cell(a.x, g);
   const double A = c_.shear_area[s];
   const double f = z[c_.layout.shear() + s];
-  for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], g[k], f * A);
+  for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], g[k], f * A);
   const BandValue bv = m_.shear.at(phi);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
@@ -190,22 +190,21 @@ void Evaluator::triple_gradient(int64_t s, const double* z, double* grad) {
 }
 
 void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
-  int64_t ids[5];
-  const unsigned arms = shear_arms(c_, s, ids);
-  V r[5];
-  V3<Dual> xd[5];
-  for (int k = 0; k < 5; ++k) {
-    // An absent arm stands in as the centre; its residual must not count twice.
-    r[k] = k > 0 && !(arms >> k & 1u) ? V{0, 0, 0} : residual_of(c_, rho_, ids[k]);
+  int64_t ids[4];
+  shear_cell(c_, s, ids);
+  V r[4];
+  V3<Dual> xd[4];
+  for (int k = 0; k < 4; ++k) {
+    r[k] = residual_of(c_, rho_, ids[k]);
     const double rv[3] = {r[k].x, r[k].y, r[k].z};
     xd[k] = load3(z + 3 * ids[k], rv);
   }
-  V3<Dual> gd[5];
-  shear_cross<Dual, false>(xd, arms, gd);
+  V3<Dual> gd[4];
+  shear_cell<Dual, false>(xd, gd);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
   const double fa = f * A / m_.force_scale, gq = gq_s_[s];
   double gr = 0;
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < 4; ++k) {
     const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
     put(&buf_s_[kShearSlot * s + 3 * k], fa * hr + gq * g, 1.0);
     gr += dot(g, r[k]);
@@ -376,16 +375,16 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
         (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
   for_shears([&](int64_t s) {
-    const CrossAt a = cross_at(c_, z, s);
-    V g[5];
-    const double phi = shear_cross(a.x, a.arms, g);
+    const CellAt a = cell_at(c_, z, s);
+    V g[4];
+    const double phi = shear_cell(a.x, g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
     const double slope = band_slope(c_.layout.shear() - c_.layout.tension() + s, m_.shear, f, phi) * A / Lr;
     double nf = 0;
-    for (int k = 0; k < 5; ++k) {
-      const double g2 = dot(g[k], g[k]);  // 0 for an absent arm
+    for (int k = 0; k < 4; ++k) {
+      const double g2 = dot(g[k], g[k]);
       const double geo = f * A * std::sqrt(g2) / Lr;
-      buf_s_[kShearSlot * s + 3 * k] = (5 * geo * geo + slope * slope * g2) * inv2;
+      buf_s_[kShearSlot * s + 3 * k] = (4 * geo * geo + slope * slope * g2) * inv2;
       nf += c_.free(a.ids[k]) ? g2 : 0;
     }
     const double lam = A / Lr;

@@ -149,8 +149,8 @@ class Evaluator {
   const LoopPolicy& pol_;
   const Reducer& red_;
   const Halo& halo_;
-  static constexpr int kShearSlot = 15;           // a shear cross: 5 particles x 3
-  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-slot contributions to particles (6, 9, 15)
+  static constexpr int kShearSlot = 12;           // a shear cell: 4 corners x 3
+  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-slot contributions to particles (6, 9, 12)
   std::vector<double> cost_p_, cost_e_, cost_t_, cost_s_;
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
@@ -176,11 +176,11 @@ void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vecto
     if (pv >= 0 && c_.triple_on[2 * pv + d]) add(&t[9 * (2 * pv + d) + 6]);
   }
   if (c_.shear_on[p]) add(&s[kShearSlot * p]);
-  // p as an arm of its neighbours' crosses: their prev_i, next_i, prev_j, next_j
-  // is p, and p sits in slot 1, 2, 3, 4 of each ([c, next_i, prev_i, next_j, prev_j]).
-  const int64_t q[4] = {c_.prev[0][p], c_.next[0][p], c_.prev[1][p], c_.next[1][p]};
-  for (int k = 0; k < 4; ++k)
-    if (q[k] >= 0 && c_.shear_on[q[k]]) add(&s[kShearSlot * q[k] + 3 * (k + 1)]);
+  // p as corner 1, 2, 3 (along i, along j, across) of the cells below it.
+  for (int k = 0; k < 3; ++k) {
+    const int64_t q = c_.corner_of[k][p];
+    if (q >= 0) add(&s[kShearSlot * q + 3 * (k + 1)]);
+  }
 }
 
 template <class FE, class FT, class FS, class Between, class FP>

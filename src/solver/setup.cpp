@@ -76,6 +76,10 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   c.edge_on.assign(2 * n, 0);
   c.triple_on.assign(2 * n, 0);
   c.shear_on.assign(n, 0);
+  for (int k = 0; k < 3; ++k) {
+    c.cell[k].assign(n, -1);
+    c.corner_of[k].assign(n, -1);
+  }
   c.bend_axis.assign(6 * n, 0.0);
   for (auto* v : {&c.edge_rest, &c.edge_width, &c.triple_rest, &c.triple_width})
     v->assign(2 * n, 0.0);

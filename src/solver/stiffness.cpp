@@ -6,7 +6,7 @@
 
 #include "solver/cost.hpp"
 #include "solver/kernels.hpp"
-#include "solver/shear_cross.hpp"
+#include "solver/shear_cell.hpp"
 
 namespace drape {
 
@@ -43,9 +43,9 @@ inline double triple_curvature(const Cloth& c, const double* x, int64_t s) {
          c.triple_rest[s];
 }
 inline double shear_strain(const Cloth& c, const double* x, int64_t s) {
-  const CrossAt a = cross_at(c, x, s);
-  V g[5];
-  return shear_cross(a.x, a.arms, g);
+  const CellAt a = cell_at(c, x, s);
+  V g[4];
+  return shear_cell(a.x, g);
 }
 }  // namespace
 
@@ -111,11 +111,11 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * g[k]);
   };
   auto shear = [&](int64_t s) {
-    const CrossAt a = cross_at(c_, z, s);
-    V g[5];
-    shear_cross<double, false>(a.x, a.arms, g);
-    const double stiff = c_.shear_area[s] * k_slope_[L.shear() - fo + s] * along(g, a.ids, 5, v);
-    for (int k = 0; k < 5; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
+    const CellAt a = cell_at(c_, z, s);
+    V g[4];
+    shear_cell<double, false>(a.x, g);
+    const double stiff = c_.shear_area[s] * k_slope_[L.shear() - fo + s] * along(g, a.ids, 4, v);
+    for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
   auto particle = [&](int64_t p) {
@@ -183,12 +183,12 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   };
   auto shear = [&](int64_t s) {
-    const CrossAt a = cross_at(c_, z, s);
-    V g[5];
-    const double phi = shear_cross(a.x, a.arms, g);
+    const CellAt a = cell_at(c_, z, s);
+    V g[4];
+    const double phi = shear_cell(a.x, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
     k_slope_[L.shear() - fo + s] = slope;
-    for (int k = 0; k < 5; ++k) buf_s_[kShearSlot * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
+    for (int k = 0; k < 4; ++k) buf_s_[kShearSlot * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
   };
   const double ca = m_.inertia_coeff();
   auto particle = [&](int64_t p) {

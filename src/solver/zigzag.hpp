@@ -2,10 +2,10 @@
 // Grid-scale zigzag: a mesh line that turns one way at a particle and back
 // at the next folds the cloth at the mesh spacing itself. No finer mesh
 // repeats such a fold (its own spacing is smaller), so where a drape has
-// many, its shape depends on the mesh. On the box drapes they lie mostly in
-// the cloth's plane: the shear cross's mean does not see them (an hourglass
-// mode, README: grid-scale zigzag). report.json's `zigzag` counts them in
-// the final state.
+// many, its shape depends on the mesh. On the box drapes they lay mostly in
+// the cloth's plane, where shear read per particle (a cross's mean) did not
+// see them (an hourglass mode, README: grid-scale zigzag); shear read per
+// cell does. report.json's `zigzag` counts them in the final state.
 #include <cstdint>
 #include <vector>
 

@@ -1,0 +1,137 @@
+// Shear read per cell (kernels.hpp shear_cell): the cells are the leaves of
+// the active mesh, a uniform shear reads alike in each, an in-plane zigzag of
+// the mesh lines shears every cell (the per-particle cross let it pass), and
+// AMRC carries the cells' shear forces across split and merge.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "amrc/amrc.hpp"
+#include "solver/shear_cell.hpp"
+#include "world.hpp"
+
+namespace drape::test {
+namespace {
+
+// 13 x 11 particles, on the finest mesh or on mixed_tree's leaves.
+World mixed_world(bool amrc) {
+  World w(flat_scene(13, 11, 0.12, 0.10), test_fabric());
+  if (!amrc) return w;
+  w.tree = mixed_tree();
+  w.rebuild();
+  return w;
+}
+
+int64_t leaf_count(const World& w) {
+  if (!w.tree) return int64_t(w.cloth.grid.ni - 1) * (w.cloth.grid.nj - 1);
+  int64_t n = 0;
+  w.tree->for_each_leaf([&](const Cell&) { ++n; });
+  return n;
+}
+
+class ShearCells : public ::testing::TestWithParam<bool> {};
+
+TEST_P(ShearCells, AreTheLeavesAndTileTheCloth) {
+  const World w = mixed_world(GetParam());
+  const Cloth& c = w.cloth;
+  int64_t on = 0;
+  double area = 0;
+  for (int64_t s = 0; s < c.grid.n(); ++s) {
+    if (!c.shear_on[s]) continue;
+    ++on;
+    area += c.shear_area[s];
+    int64_t ids[4];
+    shear_cell(c, s, ids);
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(c.active(ids[k + 1])) << "slot " << s << " corner " << k + 1;
+      EXPECT_EQ(c.corner_of[k][ids[k + 1]], s) << "corner " << k + 1 << " of slot " << s;
+    }
+    EXPECT_EQ(c.grid.j_of(ids[1]), c.grid.j_of(s)) << "corner 1 lies along i from slot " << s;
+    EXPECT_EQ(c.grid.i_of(ids[2]), c.grid.i_of(s)) << "corner 2 lies along j from slot " << s;
+    EXPECT_EQ(ids[3], ids[1] + (ids[2] - s)) << "corner 3 closes the cell of slot " << s;
+  }
+  if (GetParam()) {
+    EXPECT_LT(on, 120) << "the AMRC mesh should have coarse leaves";
+  }
+  EXPECT_EQ(on, leaf_count(w));
+  EXPECT_NEAR(area, 0.12 * 0.10, 1e-15);
+  for (int64_t p = 0; p < c.grid.n(); ++p)
+    for (int k = 0; k < 3; ++k) {
+      const int64_t s = c.corner_of[k][p];
+      if (s >= 0) {
+        EXPECT_EQ(c.cell[k][s], p) << "corner " << k + 1 << " of slot " << s;
+      }
+    }
+}
+
+// x += tan(gamma) y shears every corner of every cell by gamma exactly,
+// whatever the cell's size.
+TEST_P(ShearCells, AUniformShearReadsTheSameInEveryCell) {
+  World w = mixed_world(GetParam());
+  Cloth& c = w.cloth;
+  const double gamma = 0.2;
+  for (int64_t p = 0; p < c.grid.n(); ++p) c.z[3 * p] += std::tan(gamma) * c.z[3 * p + 1];
+  for (int64_t s = 0; s < c.grid.n(); ++s) {
+    if (!c.shear_on[s]) continue;
+    const CellAt a = cell_at(c, c.z.data(), s);
+    V3<double> g[4];
+    EXPECT_NEAR(shear_cell(a.x, g), gamma, 1e-12) << "slot " << s;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(FinestAndAmrc, ShearCells, ::testing::Values(false, true),
+                         [](const auto& info) { return info.param ? "amrc" : "finest"; });
+
+// The warp lines kinked in the cloth's plane, y += delta (-1)^i: each
+// particle's four quadrants shear alternately and their mean is zero (the
+// hourglass of the per-particle cross), but every cell shears by
+// atan(2 delta / h), with the sign alternating along i.
+TEST(ShearCell, AnInPlaneZigzagShearsEveryCell) {
+  World w = mixed_world(false);
+  Cloth& c = w.cloth;
+  const double delta = 0.1 * c.grid.hi;
+  for (int64_t p = 0; p < c.grid.n(); ++p) c.z[3 * p + 1] += c.grid.i_of(p) % 2 ? -delta : delta;
+  int64_t cells = 0;
+  for (int64_t s = 0; s < c.grid.n(); ++s) {
+    if (!c.shear_on[s]) continue;
+    const CellAt a = cell_at(c, c.z.data(), s);
+    V3<double> g[4];
+    const double sign = c.grid.i_of(s) % 2 ? 1.0 : -1.0;
+    EXPECT_NEAR(shear_cell(a.x, g), sign * std::atan(2 * delta / c.grid.hi), 1e-12) << "slot " << s;
+    ++cells;
+  }
+  EXPECT_EQ(cells, 12 * 10);
+}
+
+// Shear forces are per unit width: a split leaf's children keep the parent's,
+// and a merged parent takes the mean of its children's.
+TEST(ShearCell, AmrcCarriesTheForceAcrossSplitAndMerge) {
+  Scene s = flat_scene(9, 9, 0.08, 0.08);
+  World w(s, test_fabric());
+  Cloth& c = w.cloth;
+  Amrc amrc(c, 1);
+  amrc.set_uniform_level(c, w.fabric.density, true, 1);
+  double* f = c.shear();
+  for (int64_t p = 0; p < c.grid.n(); ++p)
+    if (c.shear_on[p]) f[p] = 1.0 + 0.1 * double(p);
+  const std::vector<double> parent(f, f + c.grid.n());
+  amrc.set_uniform_level(c, w.fabric.density, true, 0);
+  for (int64_t p = 0; p < c.grid.n(); ++p) {
+    if (!c.shear_on[p]) continue;
+    const int i = c.grid.i_of(p) & ~1, j = c.grid.j_of(p) & ~1;
+    ASSERT_EQ(f[p], parent[c.grid.id(i, j)]) << "finest cell " << p << " keeps its parent's force";
+  }
+  for (int64_t p = 0; p < c.grid.n(); ++p)
+    if (c.shear_on[p]) f[p] = double(c.grid.i_of(p) % 2) + 2.0 * double(c.grid.j_of(p) % 2);
+  amrc.set_uniform_level(c, w.fabric.density, true, 1);
+  int64_t merged = 0;
+  for (int64_t p = 0; p < c.grid.n(); ++p) {
+    if (!c.shear_on[p]) continue;
+    EXPECT_DOUBLE_EQ(f[p], (0 + 1 + 2 + 3) / 4.0) << "merged cell " << p << " takes its children's mean";
+    ++merged;
+  }
+  EXPECT_EQ(merged, 16);
+}
+
+}  // namespace
+}  // namespace drape::test
