@@ -1,9 +1,11 @@
 // Issue 2's figures: time per gradient evaluation and per CG iteration at
 // 1000 x 1000 on one rank, and the finite-difference / analytic gradient time
-// ratio on 100 x 100, both gradients timed in the same run.
+// ratio on 100 x 100, both gradients timed in the same run. Issue 3's: the
+// cost per active particle of an AMRC mesh against the finest mesh's (257).
 //   build/bench/bench_gradient --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 #include <omp.h>
+#include <time.h>
 
 #include <chrono>
 #include <functional>
@@ -15,7 +17,15 @@ namespace {
 
 // A benchmark's world, built once per size (static in each benchmark).
 struct Bed : World {
-  explicit Bed(int n) : World(mid_drape_scene(n), load_fabric("denim-A")) { jitter_mid_drape(*this, 42); }
+  explicit Bed(int n, bool amrc = false) : World(mid_drape_scene(n), load_fabric("denim-A")) {
+    if (amrc) uneven_amrc_mesh(*this);
+    jitter_mid_drape(*this, 42);
+  }
+  int64_t active() const {
+    int64_t k = 0;
+    for (uint8_t f : cloth.flags) k += (f & kActive) != 0;
+    return k;
+  }
 };
 
 void BM_Gradient(benchmark::State& state) {
@@ -67,6 +77,59 @@ double seconds_of(const std::function<void()>& f) {
   f();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// CPU seconds of the whole process (all threads): on a shared machine it
+// leaves out the time other jobs held the cores.
+double cpu_seconds_of(const std::function<void()>& f) {
+  timespec a{}, b{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  f();
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+  return double(b.tv_sec - a.tv_sec) + 1e-9 * double(b.tv_nsec - a.tv_nsec);
+}
+
+// AMRC's price per active particle against the finest mesh's, on one grid:
+// a stiffness product and a cost + gradient on each mesh, back to back in
+// every repetition, in CPU time. A coarse mesh's particles (and their elements' slots) lie
+// apart in memory, so each costs more than a finest-mesh particle; the ratio
+// is what AMRC's speed-up loses to that, beside its share of particles.
+void BM_AmrcPerParticle(benchmark::State& state) {
+  const int n = int(state.range(0));
+  static Bed fine(n), coarse(n, true);
+  Bed* beds[2] = {&fine, &coarse};
+  std::vector<double> v[2], kv[2], g[2];
+  for (int b = 0; b < 2; ++b) {
+    const size_t size = beds[b]->cloth.z.size();
+    v[b].assign(size, 1e-6), kv[b].assign(size, 0.0), g[b].assign(size, 0.0);
+    std::vector<double> diag(size);
+    beds[b]->loop->evaluator().hysteresis_forces(beds[b]->cloth.z.data());
+    beds[b]->loop->evaluator().stiffness_diagonal(beds[b]->cloth.z.data(), diag.data());
+  }
+  double product[2] = {}, gradient[2] = {};
+  const int per = 5;
+  for (auto _ : state)
+    for (int b = 0; b < 2; ++b) {
+      Evaluator& ev = beds[b]->loop->evaluator();
+      double* z = beds[b]->cloth.z.data();
+      product[b] += cpu_seconds_of([&] {
+        for (int k = 0; k < per; ++k) ev.stiffness_product(z, v[b].data(), kv[b].data());
+      });
+      gradient[b] += cpu_seconds_of([&] {
+        for (int k = 0; k < per; ++k) ev.evaluate(z, g[b].data());
+      });
+    }
+  const double reps = double(state.iterations()) * per;
+  const double ns[4] = {1e9 * product[0] / reps / fine.active(), 1e9 * product[1] / reps / coarse.active(),
+                        1e9 * gradient[0] / reps / fine.active(), 1e9 * gradient[1] / reps / coarse.active()};
+  state.counters["share"] = double(coarse.active()) / fine.active();
+  state.counters["product_ns_fine"] = ns[0];
+  state.counters["product_ns_amrc"] = ns[1];
+  state.counters["product_amrc_over_fine"] = ns[1] / ns[0];
+  state.counters["gradient_ns_fine"] = ns[2];
+  state.counters["gradient_ns_amrc"] = ns[3];
+  state.counters["gradient_amrc_over_fine"] = ns[3] / ns[2];
+}
+BENCHMARK(BM_AmrcPerParticle)->Arg(257)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Both gradients timed back to back in each repetition: the ratio is a
 // measurement of one run, not of two runs on a shared machine.

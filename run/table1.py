@@ -1,5 +1,10 @@
 """Table 1 from run/table1's runs: reads each run's report.json and the final
-frame of its drape.h5, prints the table and writes table1.json."""
+frame of its drape.h5, prints the table and writes table1.json.
+Usage: table1.py DIR PAIR... [--ledger LEDGER.tsv]
+With --ledger (a campaign's, bench/table1-257/ledger.tsv), a row that ran in
+segments, on different machines or thread counts, gets its time from the
+ledger: see campaign_time."""
+import collections
 import json
 import sys
 import tomllib
@@ -33,8 +38,73 @@ def on_grid(x, n):
     return cols
 
 
+def ledger_segments(path):
+    """A campaign ledger's segments per row, in order (lines without a report skipped)."""
+    rows = collections.defaultdict(list)
+    with open(path) as f:
+        head = f.readline().rstrip("\n").split("\t")
+        for n, line in enumerate(f, start=2):
+            v = dict(zip(head, line.rstrip("\n").split("\t")))
+            if v.get("wall_seconds", "NA") == "NA":
+                continue
+            try:
+                rows[v["row"]].append({
+                    "wall": float(v["wall_seconds"]),
+                    "cpu": float(v["cpu_seconds"]) if v.get("cpu_seconds", "NA") != "NA" else None,
+                    "iterations": int(v["iterations"]), "mean": float(v["particles_mean"]),
+                    "min": int(v["particles_min"]) if v.get("particles_min", "NA") != "NA" else None,
+                    "max": int(v["particles_max"]) if v.get("particles_max", "NA") != "NA" else None,
+                    "machine": (v["host"], int(v["threads"]) if v.get("threads") else 1)})
+            except (KeyError, ValueError) as e:
+                sys.exit(f"table1.py: {path}:{n}: unreadable ledger line ({e})")
+    return rows
+
+
+def campaign_time(segments, machine):
+    """A row's time on one machine (host, threads), from its segments. Each
+    segment did mean * iterations - (the same before it) particle-iterations
+    (the ledger's counts are cumulative). The segments that ran on `machine`
+    give the row's seconds per particle-iteration there; the others' work is
+    counted at that rate. With every segment on `machine` this is the plain
+    sum of the wall times. Returns wall and CPU seconds (CPU None unless every
+    segment on `machine` has it) and the particle-iterations."""
+    done, on, wall, cpu, work_on, work_off = 0.0, [], 0.0, 0.0, 0.0, 0.0
+    for seg in segments:
+        total = seg["mean"] * seg["iterations"]
+        work = total - done
+        done = total
+        if seg["machine"] == machine:
+            on.append(seg)
+            wall += seg["wall"]
+            cpu = None if cpu is None or seg["cpu"] is None else cpu + seg["cpu"]
+            work_on += work
+        else:
+            work_off += work
+    if not on or work_on <= 0:
+        return None
+    scale = 1 + work_off / work_on
+    return {"wall_seconds": wall * scale, "cpu_seconds": None if cpu is None else cpu * scale,
+            "particle_iterations": done, "measured_share": work_on / done, "segments": len(segments)}
+
+
+def reference_machine(segments):
+    """The (host, threads) on which the row spent the most wall time."""
+    spent = collections.Counter()
+    for seg in segments:
+        spent[seg["machine"]] += seg["wall"]
+    return spent.most_common(1)[0][0]
+
+
 def main():
-    out, pairs = sys.argv[1], sys.argv[2:]
+    args = sys.argv[1:]
+    ledger = None
+    if "--ledger" in args:
+        k = args.index("--ledger")
+        if k + 1 >= len(args):
+            sys.exit("table1.py: --ledger needs a file")
+        ledger = ledger_segments(args[k + 1])
+        del args[k:k + 2]
+    out, pairs = args[0], args[1:]
     rows = []
     for pair in pairs:
         fine, coarse = (int(v) for v in pair.split(":"))
@@ -60,6 +130,8 @@ def main():
                 # kinks at the mesh spacing in the final state (reports before it existed: none)
                 "zigzag_share": r.get("zigzag", {}).get("share"),
             })
+    if ledger is not None:
+        apply_ledger(rows, ledger)
     json.dump({"rows": rows}, open(f"{out}/table1.json", "w"), indent=1)
     print("%-5s %-9s %10s %8s %8s %15s %8s %12s %12s %12s %7s" % (
         "size", "mesh", "grid", "wall [s]", "t [s]", "particles", "mean", "cost err", "geom err", "penetr. [m]",
@@ -83,6 +155,35 @@ def main():
               % (size, f["wall_seconds"] / a["wall_seconds"], work(f) / max(work(a), 1e-300),
                  a["quality_error_geometric"], c["quality_error_geometric"],
                  a["quality_error_geometric"] / max(c["quality_error_geometric"], 1e-300)))
+        if f.get("cpu_seconds") and a.get("cpu_seconds"):
+            print("%d: in CPU time AMRC is %.2fx faster" % (size, f["cpu_seconds"] / a["cpu_seconds"]))
 
 
-main()
+def apply_ledger(rows, ledger):
+    """Times from the campaign's ledger, on the machine the AMRC row ran on."""
+    for size in sorted({r["size"] for r in rows}):
+        amrc = ledger.get(f"{size}-amrc")
+        if not amrc:
+            continue
+        machine = reference_machine(amrc)
+        for r in rows:
+            segs = ledger.get("%d-%s" % (r["grid"][0], {"AMRC": "amrc"}.get(r["mesh"], r["mesh"])))
+            t = campaign_time(segs, machine) if r["size"] == size and segs else None
+            if t is None:
+                continue
+            r.update(t)
+            lo = [g["min"] for g in segs if g["min"] is not None]
+            hi = [g["max"] for g in segs if g["max"] is not None]
+            if lo and hi:  # a segment's report counts its own steps only
+                r["particles_min"], r["particles_max"] = min(lo), max(hi)
+            r["machine"] = "%s, %d thread(s)" % machine
+    for r in rows:
+        if "machine" in r:
+            print("%d %s: %.0f s on %s over %d segment(s), %.0f%% of its work timed there%s"
+                  % (r["size"], r["mesh"], r["wall_seconds"], r["machine"], r["segments"],
+                     100 * r["measured_share"],
+                     "" if r["cpu_seconds"] is None else "; CPU %.0f s" % r["cpu_seconds"]))
+
+
+if __name__ == "__main__":
+    main()

@@ -46,6 +46,8 @@ for method in $cases; do
     one=$(sum "$work/$method-1") many=$(sum "$work/$method-$n")
     [[ -n $one && $one == "$many" ]] || { echo "$method: checksums differ: 1 rank $one, $n ranks $many"; exit 1; }
     grep -q "\"ranks\": $n" "$work/$method-$n/report.json" || { echo "the report does not say $n ranks"; exit 1; }
+    python3 -c 'import json,sys; r=json.load(open(sys.argv[1])); sys.exit(not r["cpu_seconds"] > 0)' \
+      "$work/$method-$n/report.json" || { echo "$method: the $n-rank report has no CPU time"; exit 1; }
     [[ $(zz "$work/$method-1") == $(zz "$work/$method-$n") ]] ||
       { echo "$method: zigzag counts (pairs, zigzags) differ: 1 rank $(zz "$work/$method-1"), $n ranks $(zz "$work/$method-$n")"; exit 1; }
     h5diff "$work/$method-1/drape.h5" "$work/$method-$n/drape.h5" /frames /frames ||

@@ -61,11 +61,15 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
 int64_t active_particles(const Cloth& c);
 // Collective (the reducer's max).
 double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red);
+// This process's CPU time so far (user + system, all its threads), in µs:
+// beside the wall time, it times a run that shared its cores with others.
+int64_t process_cpu_microseconds();
+// cpu: the CPU seconds of all ranks together.
 std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& cloth,
-                        const Summary& s, const Timers& tm, double wall, int ranks, int threads,
+                        const Summary& s, const Timers& tm, double wall, double cpu, int ranks, int threads,
                         const std::string& checksum, double penetration_depth, int64_t free_particles);
 void print_table2(const Table2& t, int threads);
-void print_timing_table(const Timers& tm, double wall, const std::string& checksum, const DecompStats& d,
+void print_timing_table(const Timers& tm, double wall, double cpu, const std::string& checksum, const DecompStats& d,
                         int ranks);
 
 }  // namespace drape

@@ -1,0 +1,79 @@
+"""run/table1.py --ledger: a Table 1 row run in segments, on two machines,
+gets its time on the AMRC row's machine (the segments timed there give the
+rate per particle-iteration; the others' work is counted at that rate)."""
+import os
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "run"))
+import table1  # noqa: E402
+
+HEAD = ("row\tsegment\twall_seconds\tsteps\tsimulated_seconds\tat_rest\tparticles_mean\titerations\t"
+        "date\thost\tstarted\tthreads\tcpu_seconds\tparticles_min\tparticles_max\n")
+
+
+def line(row, seg, wall, mean, its, host, threads, cpu="NA", lo="NA", hi="NA"):
+    return "\t".join(str(v) for v in (row, seg, wall, 1, 0.1, False, mean, its, "d", host, 0, threads,
+                                      cpu, lo, hi)) + "\n"
+
+
+# finest: 1e5 particle-iterations on a 16-thread machine, then 5e4 here in
+# 50 s: 1e-3 s each here, so 150 s in all. AMRC: 2e4 then 7e3 (the mean
+# falls from 20 to 18 as iterations go from 1000 to 1500), all here.
+LEDGER = (HEAD
+          + line("9-finest", "9-finest", 100, 100, 1000, "lent", 16, lo=100, hi=100)
+          + line("9-amrc", "9-amrc", 30, 20, 1000, "vm", 1, lo=12, hi=100)
+          + "9-amrc\t9-amrc.x\tNA\tNA\tNA\tNA\tNA\tNA\td\tvm\t0\tNA\t# no report\n"
+          + line("9-finest", "9-finest.2", 50, 100, 1500, "vm", 1, cpu=45, lo=100, hi=100)
+          + line("9-amrc", "9-amrc.2", 10, 18, 1500, "vm", 1, cpu=9, lo=8, hi=14))
+
+
+class Ledger(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.path = os.path.join(self.dir.name, "ledger.tsv")
+        with open(self.path, "w") as f:
+            f.write(LEDGER)
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def test_segments_skip_lines_without_a_report(self):
+        segs = table1.ledger_segments(self.path)
+        self.assertEqual([len(segs["9-finest"]), len(segs["9-amrc"])], [2, 2])
+        self.assertIsNone(segs["9-amrc"][0]["cpu"])
+
+    def test_time_on_the_reference_machine(self):
+        segs = table1.ledger_segments(self.path)
+        self.assertEqual(table1.reference_machine(segs["9-amrc"]), ("vm", 1))
+        f = table1.campaign_time(segs["9-finest"], ("vm", 1))
+        self.assertAlmostEqual(f["wall_seconds"], 150.0)
+        self.assertAlmostEqual(f["cpu_seconds"], 135.0)
+        self.assertAlmostEqual(f["particle_iterations"], 1.5e5)
+        self.assertAlmostEqual(f["measured_share"], 1 / 3)
+        a = table1.campaign_time(segs["9-amrc"], ("vm", 1))
+        self.assertAlmostEqual(a["wall_seconds"], 40.0)  # all here: the plain sum
+        self.assertIsNone(a["cpu_seconds"])  # the first segment's report had none
+        self.assertAlmostEqual(a["particle_iterations"], 2.7e4)
+        self.assertIsNone(table1.campaign_time(segs["9-amrc"], ("elsewhere", 4)))
+
+    def test_rows_take_the_ledger_time_and_particle_range(self):
+        rows = [{"size": 9, "mesh": m, "grid": [n, n], "wall_seconds": 1.0, "particles_min": 0,
+                 "particles_max": 0} for m, n in (("finest", 9), ("AMRC", 9), ("coarsest", 3))]
+        table1.apply_ledger(rows, table1.ledger_segments(self.path))
+        self.assertAlmostEqual(rows[0]["wall_seconds"], 150.0)
+        self.assertEqual((rows[1]["particles_min"], rows[1]["particles_max"]), (8, 100))
+        self.assertAlmostEqual(rows[1]["wall_seconds"], 40.0)
+        self.assertEqual(rows[2]["wall_seconds"], 1.0)  # not in the ledger: its own report's
+
+    def test_a_bad_line_names_the_file_and_line(self):
+        with open(self.path, "a") as f:
+            f.write(line("9-amrc", "9-amrc.3", "fast", 18, 1500, "vm", 1))
+        with self.assertRaises(SystemExit) as e:
+            table1.ledger_segments(self.path)
+        self.assertIn("ledger.tsv:7", str(e.exception))
+
+
+if __name__ == "__main__":
+    unittest.main()
