@@ -100,21 +100,38 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 2; ++k)
       put(&buf_e_[6 * s + 3 * k], w * (tension * deriv_of(g[k]) + stiff * value_of(g[k])));
   };
+  // The triples' and cells' strain gradients and slope factors depend on z
+  // alone: the first product of a linear solve keeps them (kg_t_, kg_s_),
+  // the others read them back, bit for bit the same numbers.
+  const bool fill = !kg_ready_;
   auto triple = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
-    V g[3];
-    bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
-    const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
-    const double stiff = w * k_slope_[L.moment() - fo + s] / Lm * along(g, ids, 3, v);
+    double* kg = &kg_t_[kKgTriple * s];
+    if (fill) {
+      V g[3];
+      bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
+      kg[0] = c_.triple_width[s] * k_slope_[L.moment() - fo + s] / c_.triple_rest[s];
+      for (int k = 0; k < 3; ++k) put(kg + 1 + 3 * k, g[k]);
+    }
+    const V g[3] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7)};
+    const double stiff = kg[0] * along(g, ids, 3, v);
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * g[k]);
   };
   auto shear = [&](int64_t s) {
-    const CellAt a = cell_at(c_, z, s);
-    V g[4];
-    shear_cell<double, false>(a.x, g);
-    const double stiff = c_.shear_area[s] * k_slope_[L.shear() - fo + s] * along(g, a.ids, 4, v);
+    double* kg = &kg_s_[kKgCell * s];
+    int64_t ids[4];
+    if (fill) {
+      const CellAt a = cell_at(c_, z, s);
+      V g[4];
+      shear_cell<double, false>(a.x, g);
+      kg[0] = c_.shear_area[s] * k_slope_[L.shear() - fo + s];
+      for (int k = 0; k < 4; ++k) put(kg + 1 + 3 * k, g[k]);
+    }
+    shear_cell(c_, s, ids);
+    const V g[4] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7), load3<double>(kg + 10)};
+    const double stiff = kg[0] * along(g, ids, 4, v);
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
@@ -139,6 +156,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
+  kg_ready_ = true;
   hanging_into_ends(kv, [&](int64_t h, double* out) {  // P^T K P: no mass at h
     double fc[3], slope = 0;
     const bool touching = contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
@@ -155,6 +173,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
 }
 
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
+  kg_ready_ = false;  // a new z: stiffness_product computes its gradients again
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   // Per element and particle: the diagonal of its stiffness block, in the
