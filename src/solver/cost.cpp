@@ -42,6 +42,7 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   k_tension_.assign(2 * n, 0.0);
   kg_t_.assign(2 * n * kKgTriple, 0.0);
   kg_s_.assign(n * kKgCell, 0.0);
+  kc_.assign(n * kKc, 0.0);
   hres_.assign(3 * n, 0.0);
   hpend_.assign(3 * n, 0.0);
   partials_.assign(4 * size_t(tiling.count()), 0.0);

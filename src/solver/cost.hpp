@@ -158,7 +158,8 @@ class Evaluator {
   std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
                                                   // the tension block) and edge tensions
   static constexpr int kKgTriple = 10, kKgCell = 13;  // slope factor, then the gradient (3 or 4 x 3)
-  std::vector<double> kg_t_, kg_s_;               // per slot, at the linear solve's z (stiffness_product)
+  static constexpr int kKc = 5;                   // contact force (3), its size, its slope
+  std::vector<double> kg_t_, kg_s_, kc_;          // per slot / particle, at the linear solve's z (stiffness_product)
   bool kg_ready_ = false;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles

@@ -102,7 +102,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   };
   // The triples' and cells' strain gradients and slope factors depend on z
   // alone: the first product of a linear solve keeps them (kg_t_, kg_s_),
-  // the others read them back, bit for bit the same numbers.
+  // the others read them back, bit for bit the same numbers. So do the
+  // particles' contact terms (kc_).
   const bool fill = !kg_ready_;
   auto triple = [&](int64_t s) {
     const int64_t p = s >> 1;
@@ -135,18 +136,27 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
+  // A particle's contact force, its size and slope (kc_, kKc a particle): z's
+  // too, kept like the gradients above; size 0 where it does not touch.
+  auto contact_at = [&](int64_t p) -> const double* {
+    double* kc = &kc_[kKc * p];
+    if (fill) {
+      double slope = 0;
+      const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
+      kc[3] = touching ? std::sqrt(kc[0] * kc[0] + kc[1] * kc[1] + kc[2] * kc[2]) : 0.0;
+      kc[4] = slope;
+    }
+    return kc;
+  };
   auto particle = [&](int64_t p) {
-    double fc[3], slope = 0;
-    const bool touching = contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
+    const double* fc = contact_at(p);
+    const double fn = fc[3], slope = fc[4];
     const double* vp = v + 3 * p;
     double out[3];
     for (int k = 0; k < 3; ++k) out[k] = c_.mass[p] * ca * vp[k];
-    if (touching) {  // slope * n (n.v); n from the force direction
-      const double fn = std::sqrt(fc[0] * fc[0] + fc[1] * fc[1] + fc[2] * fc[2]);
-      if (fn > 0) {
-        const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
-        for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
-      }
+    if (fn > 0) {  // slope * n (n.v); n from the force direction
+      const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
+      for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
     }
     gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) {
       out[0] += c[0];
@@ -156,20 +166,19 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
-  kg_ready_ = true;
   hanging_into_ends(kv, [&](int64_t h, double* out) {  // P^T K P: no mass at h
-    double fc[3], slope = 0;
-    const bool touching = contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
-    const double fn = std::sqrt(fc[0] * fc[0] + fc[1] * fc[1] + fc[2] * fc[2]);
+    const double* fc = contact_at(h);
+    const double fn = fc[3], slope = fc[4];
     const double* vh = v + 3 * h;
-    const double nv = touching && fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
-    for (int k = 0; k < 3; ++k) out[k] = touching && fn > 0 ? slope * nv * fc[k] / fn : 0.0;
+    const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
+    for (int k = 0; k < 3; ++k) out[k] = fn > 0 ? slope * nv * fc[k] / fn : 0.0;
     gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
       out[2] += c[2];
     });
   }, 1.0, 0.0);
+  kg_ready_ = true;
 }
 
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
