@@ -40,6 +40,7 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   rho_.assign(3 * n, 0.0);
   k_slope_.assign(5 * n, 0.0);
   k_tension_.assign(2 * n, 0.0);
+  kg_e_.assign(2 * n * kKgEdge, 0.0);
   kg_t_.assign(2 * n * kKgTriple, 0.0);
   kg_s_.assign(n * kKgCell, 0.0);
   kc_.assign(n * kKc, 0.0);

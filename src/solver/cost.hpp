@@ -135,6 +135,7 @@ class Evaluator {
   // order: the element forces on them into their ends' residuals; residuals
   // back onto them; per-particle results (the gradient, K v, diagonals) onto
   // their ends.
+  void edge_kept(int64_t s, const double* za, const double* zb, double* ke) const;  // ends' positions
   void hanging_forces(const double* z);
   void hanging_residuals();
   template <class Own>
@@ -158,8 +159,9 @@ class Evaluator {
   std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
                                                   // the tension block) and edge tensions
   static constexpr int kKgTriple = 10, kKgCell = 13;  // slope factor, then the gradient (3 or 4 x 3)
+  static constexpr int kKgEdge = 11;              // edge_kept's numbers
   static constexpr int kKc = 5;                   // contact force (3), its size, its slope
-  std::vector<double> kg_t_, kg_s_, kc_;          // per slot / particle, at the linear solve's z (stiffness_product)
+  std::vector<double> kg_e_, kg_t_, kg_s_, kc_;          // per slot / particle, at the linear solve's z (stiffness_product)
   bool kg_ready_ = false;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
