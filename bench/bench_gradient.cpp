@@ -30,6 +30,22 @@ struct Bed : World {
   }
 };
 
+double seconds_of(const std::function<void()>& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// CPU seconds of the whole process (all threads): on a shared machine it
+// leaves out the time other jobs held the cores.
+double cpu_seconds_of(const std::function<void()>& f) {
+  timespec a{}, b{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  f();
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+  return double(b.tv_sec - a.tv_sec) + 1e-9 * double(b.tv_nsec - a.tv_nsec);
+}
+
 void BM_Gradient(benchmark::State& state) {
   static Bed bed(int(state.range(0)));
   std::vector<double> g(bed.cloth.z.size());
@@ -48,12 +64,43 @@ void BM_StiffnessProduct(benchmark::State& state) {
   std::vector<double> v(bed.cloth.z.size(), 1e-6), kv(bed.cloth.z.size()), diag(bed.cloth.z.size());
   bed.loop->evaluator().hysteresis_forces(bed.cloth.z.data());
   bed.loop->evaluator().stiffness_diagonal(bed.cloth.z.data(), diag.data());  // freezes the band slopes
+  // The first product at a z keeps its z-only numbers; the others, which
+  // this times, read them (one Newton linear solve: a first, then dozens).
+  bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
   for (auto _ : state) {
     bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
     benchmark::DoNotOptimize(kv.data());
   }
 }
 BENCHMARK(BM_StiffnessProduct)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One Newton linear solve's worth of products (a diagonal, then 20
+// products at one z), with the products' z-only numbers kept and computed
+// anew, back to back in every repetition: where keeping them pays.
+void BM_KeptProducts(benchmark::State& state) {
+  Bed bed(int(state.range(0)));
+  Evaluator& ev = bed.loop->evaluator();
+  std::vector<double> v(bed.cloth.z.size(), 1e-6), kv(bed.cloth.z.size()), diag(bed.cloth.z.size());
+  ev.hysteresis_forces(bed.cloth.z.data());
+  const int per = 20;
+  double seconds[2] = {};
+  for (auto _ : state)
+    for (int keep = 0; keep < 2; ++keep) {
+      state.PauseTiming();
+      ev.keep_products(keep == 1);
+      state.ResumeTiming();
+      seconds[keep] += cpu_seconds_of([&] {
+        ev.stiffness_diagonal(bed.cloth.z.data(), diag.data());
+        for (int k = 0; k < per; ++k) ev.stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
+      });
+    }
+  const double n = double(state.iterations()) * per;
+  state.counters["computed_ms"] = 1e3 * seconds[0] / n;
+  state.counters["kept_ms"] = 1e3 * seconds[1] / n;
+  state.counters["kept_over_computed"] = seconds[1] / seconds[0];
+}
+BENCHMARK(BM_KeptProducts)->Arg(257)->Arg(513)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->Iterations(3);
 
 void BM_CgIteration(benchmark::State& state) {
   static Bed bed(int(state.range(0)));
@@ -73,22 +120,6 @@ void BM_CgIteration(benchmark::State& state) {
       benchmark::Counter(iterations, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_CgIteration)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
-
-double seconds_of(const std::function<void()>& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-// CPU seconds of the whole process (all threads): on a shared machine it
-// leaves out the time other jobs held the cores.
-double cpu_seconds_of(const std::function<void()>& f) {
-  timespec a{}, b{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
-  f();
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
-  return double(b.tv_sec - a.tv_sec) + 1e-9 * double(b.tv_nsec - a.tv_nsec);
-}
 
 // AMRC's price per active particle against the finest mesh's, on one grid:
 // a stiffness product and a cost + gradient on each mesh, back to back in

@@ -249,8 +249,9 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
 
 // stiffness_product keeps the triples' and cells' gradients from its first
 // call at a z (stiffness_diagonal starts over): a product read back from
-// them is bit for bit the one that computed them, and after z moves the
-// products follow it (an evaluator that never saw the old z agrees exactly).
+// them is bit for bit the one that computed them (and one that keeps
+// nothing), and after z moves the products follow it (an evaluator that
+// never saw the old z agrees exactly).
 TEST(Stiffness, KeptGradientsFollowZ) {
   for (bool amrc : {false, true}) {
     World w = random_world(12, amrc), fresh = random_world(12, amrc);
@@ -271,6 +272,10 @@ TEST(Stiffness, KeptGradientsFollowZ) {
     std::vector<double> vv = v;
     w.loop->evaluator().stiffness_product(w.cloth.z.data(), vv.data(), k2.data());
     EXPECT_EQ(k1, k2) << (amrc ? "AMRC mesh" : "plain mesh");
+    w.loop->evaluator().keep_products(false);  // computed anew each time: the same numbers
+    product(w, k3);
+    EXPECT_EQ(k1, k3) << (amrc ? "AMRC mesh, not keeping" : "plain mesh, not keeping");
+    w.loop->evaluator().keep_products(true);
     for (World* x : {&w, &fresh})
       for (int64_t p : x->lists.particles.items) x->cloth.z[3 * p + 2] += 1e-3 * x->cloth.grid.hi * (p % 5);
     product(w, k2);

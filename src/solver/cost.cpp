@@ -40,13 +40,21 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   rho_.assign(3 * n, 0.0);
   k_slope_.assign(5 * n, 0.0);
   k_tension_.assign(2 * n, 0.0);
+  keep_products(true);
+  hres_.assign(3 * n, 0.0);
+  hpend_.assign(3 * n, 0.0);
+  partials_.assign(4 * size_t(tiling.count()), 0.0);
+}
+
+void Evaluator::keep_products(bool on) {
+  const int64_t n = on ? c_.grid.n() : 0;
+  for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_}) std::vector<double>().swap(*a);  // off: no memory
   kg_e_.assign(2 * n * kKgEdge, 0.0);
   kg_t_.assign(2 * n * kKgTriple, 0.0);
   kg_s_.assign(n * kKgCell, 0.0);
   kc_.assign(n * kKc, 0.0);
-  hres_.assign(3 * n, 0.0);
-  hpend_.assign(3 * n, 0.0);
-  partials_.assign(4 * size_t(tiling.count()), 0.0);
+  keep_ = on;
+  kg_ready_ = false;
 }
 
 // ---- pass 1: element forces and band costs -------------------------------

@@ -71,6 +71,11 @@ class Evaluator {
   // Needs stiffness_diagonal at the same z first (Newton's linear CG calls it
   // once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
+  // Whether stiffness_product keeps its z-only numbers across a linear
+  // solve (60 doubles a particle of the grid; on from the start): off, every
+  // product computes them again, the same numbers (bench_gradient's
+  // BM_KeptProducts times both). Allocates: call it before the time loop.
+  void keep_products(bool on);
   // Its diagonal, at the same entries. Also freezes each element's band
   // slope (and each edge's tension) at z for stiffness_product, so that a
   // product evaluates no band, power law or angle: those cost more than the
@@ -161,6 +166,7 @@ class Evaluator {
   static constexpr int kKgTriple = 10, kKgCell = 13;  // slope factor, then the gradient (3 or 4 x 3)
   static constexpr int kKgEdge = 11;              // edge_kept's numbers
   static constexpr int kKc = 5;                   // contact force (3), its size, its slope
+  bool keep_ = false;                             // keep_products
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;          // per slot / particle, at the linear solve's z (stiffness_product)
   bool kg_ready_ = false;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends

@@ -106,10 +106,11 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  const bool fill = !kg_ready_;
+  const bool fill = !keep_ || !kg_ready_;  // not keeping: every product computes them
   auto edge = [&](int64_t s) {
     const int64_t p = s >> 1, q = c_.next[s & 1][p];
-    double* ke = &kg_e_[kKgEdge * s];
+    double mine[kKgEdge];
+    double* ke = keep_ ? &kg_e_[kKgEdge * s] : mine;
     if (fill) edge_kept(s, z + 3 * p, z + 3 * q, ke);
     // edge_length on duals at (z, v), its eps parts written out in the same
     // operations, with the value parts kept: bit for bit its numbers.
@@ -132,7 +133,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
-    double* kg = &kg_t_[kKgTriple * s];
+    double mine[kKgTriple];
+    double* kg = keep_ ? &kg_t_[kKgTriple * s] : mine;
     if (fill) {
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
@@ -144,7 +146,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * g[k]);
   };
   auto shear = [&](int64_t s) {
-    double* kg = &kg_s_[kKgCell * s];
+    double mine[kKgCell];
+    double* kg = keep_ ? &kg_s_[kKgCell * s] : mine;
     int64_t ids[4];
     if (fill) {
       const CellAt a = cell_at(c_, z, s);
@@ -161,8 +164,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   const double ca = m_.inertia_coeff();
   // A particle's contact force, its size and slope (kc_, kKc a particle): z's
   // too, kept like the gradients above; size 0 where it does not touch.
-  auto contact_at = [&](int64_t p) -> const double* {
-    double* kc = &kc_[kKc * p];
+  auto contact_at = [&](int64_t p, double* mine) -> const double* {
+    double* kc = keep_ ? &kc_[kKc * p] : mine;
     if (fill) {
       double slope = 0;
       const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
@@ -172,7 +175,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     return kc;
   };
   auto particle = [&](int64_t p) {
-    const double* fc = contact_at(p);
+    double mine[kKc];
+    const double* fc = contact_at(p, mine);
     const double fn = fc[3], slope = fc[4];
     const double* vp = v + 3 * p;
     double out[3];
@@ -190,7 +194,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends(kv, [&](int64_t h, double* out) {  // P^T K P: no mass at h
-    const double* fc = contact_at(h);
+    double mine[kKc];
+    const double* fc = contact_at(h, mine);
     const double fn = fc[3], slope = fc[4];
     const double* vh = v + 3 * h;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
