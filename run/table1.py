@@ -41,7 +41,11 @@ def on_grid(x, n):
 def ledger_segments(path):
     """A campaign ledger's segments per row, in order (lines without a report skipped)."""
     rows = collections.defaultdict(list)
-    with open(path) as f:
+    try:
+        f = open(path)
+    except OSError as e:
+        sys.exit(f"table1.py: cannot read the ledger {path}: {e.strerror}")
+    with f:
         head = f.readline().rstrip("\n").split("\t")
         for n, line in enumerate(f, start=2):
             v = dict(zip(head, line.rstrip("\n").split("\t")))

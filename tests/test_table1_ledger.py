@@ -74,6 +74,12 @@ class Ledger(unittest.TestCase):
             table1.ledger_segments(self.path)
         self.assertIn("ledger.tsv:7", str(e.exception))
 
+    def test_a_missing_ledger_is_named(self):
+        with self.assertRaises(SystemExit) as e:
+            table1.ledger_segments(self.path + ".none")
+        self.assertIn("cannot read the ledger", str(e.exception))
+        self.assertIn("ledger.tsv.none", str(e.exception))
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -72,7 +72,7 @@ class Evaluator {
   // once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
   // Whether stiffness_product keeps its z-only numbers across a linear
-  // solve (60 doubles a particle of the grid; on from the start): off, every
+  // solve (54 doubles a particle of the grid; on from the start): off, every
   // product computes them again, the same numbers (bench_gradient's
   // BM_KeptProducts times both). Allocates: call it before the time loop.
   void keep_products(bool on);
@@ -140,7 +140,6 @@ class Evaluator {
   // order: the element forces on them into their ends' residuals; residuals
   // back onto them; per-particle results (the gradient, K v, diagonals) onto
   // their ends.
-  void edge_kept(int64_t s, const double* za, const double* zb, double* ke) const;  // ends' positions
   void hanging_forces(const double* z);
   void hanging_residuals();
   template <class Own>
@@ -163,12 +162,16 @@ class Evaluator {
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
   std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
                                                   // the tension block) and edge tensions
-  static constexpr int kKgTriple = 10, kKgCell = 13;  // slope factor, then the gradient (3 or 4 x 3)
-  static constexpr int kKgEdge = 11;              // edge_kept's numbers
-  static constexpr int kKc = 5;                   // contact force (3), its size, its slope
-  bool keep_ = false;                             // keep_products
-  std::vector<double> kg_e_, kg_t_, kg_s_, kc_;          // per slot / particle, at the linear solve's z (stiffness_product)
+  // stiffness_product's z-only numbers, per slot or particle, kept from the
+  // first product at the linear solve's z (keep_products; kg_ready_ until
+  // stiffness_diagonal's next z): edges (edge_kept), triples and cells
+  // (slope factor, then the gradient, 3 or 4 x 3), contact (force, size, slope).
+  static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 5;
+  bool keep_ = false;
   bool kg_ready_ = false;
+  std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
+  // An edge's numbers into ke, from its ends' positions.
+  void edge_kept(int64_t s, const double* za, const double* zb, double* ke) const;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy

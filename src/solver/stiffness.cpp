@@ -86,19 +86,17 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a)
 }
 
 // An edge's z-only numbers for stiffness_product, as edge_length on duals
-// computes their value parts: e = b - a, |e|, 1/|e|, e/|e|; then its frozen
-// tension, slope / rest length and width.
+// computes their value parts: e = b - a, |e|, 1/|e| (e/|e| is one product
+// away); then its frozen tension, slope / rest length and width.
 void Evaluator::edge_kept(int64_t s, const double* za, const double* zb, double* ke) const {
   const V e = load3<double>(zb) - load3<double>(za);
-  const double Lv = std::sqrt(dot(e, e)), iv = 1.0 / Lv;
-  const V u = iv * e;
+  const double Lv = std::sqrt(dot(e, e));
   put(ke, e);
   ke[3] = Lv;
-  ke[4] = iv;
-  put(ke + 5, u);
-  ke[8] = k_tension_[s];
-  ke[9] = k_slope_[s] / c_.edge_rest[s];
-  ke[10] = c_.edge_width[s];
+  ke[4] = 1.0 / Lv;
+  ke[5] = k_tension_[s];
+  ke[6] = k_slope_[s] / c_.edge_rest[s];
+  ke[7] = c_.edge_width[s];
 }
 
 void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
@@ -106,7 +104,11 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  const bool fill = !keep_ || !kg_ready_;  // not keeping: every product computes them
+  // What depends on z alone (edges' lengths and directions, triples' and
+  // cells' strain gradients and slope factors, particles' contact terms): the
+  // first product of a linear solve keeps it, the others read it back, bit for
+  // bit the same numbers. Not keeping, every product computes it.
+  const bool fill = !keep_ || !kg_ready_;
   auto edge = [&](int64_t s) {
     const int64_t p = s >> 1, q = c_.next[s & 1][p];
     double mine[kKgEdge];
@@ -114,21 +116,18 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     if (fill) edge_kept(s, z + 3 * p, z + 3 * q, ke);
     // edge_length on duals at (z, v), its eps parts written out in the same
     // operations, with the value parts kept: bit for bit its numbers.
-    const V e = load3<double>(ke), u = load3<double>(ke + 5), ed = at(v, q) - at(v, p);
+    const V e = load3<double>(ke), ed = at(v, q) - at(v, p);
     const double Lv = ke[3], iv = ke[4];
+    const V u = iv * e;
     const double dd = (ed.x * e.x + e.x * ed.x) + (ed.y * e.y + e.y * ed.y) + (ed.z * e.z + e.z * ed.z);
     const double Ld = dd / (2 * Lv);
     const double invd = (0.0 * Lv - 1.0 * Ld) / (Lv * Lv);
     const V ud{invd * e.x + iv * ed.x, invd * e.y + iv * ed.y, invd * e.z + iv * ed.z};
     const V dg[2] = {{0.0 * u.x + -1.0 * ud.x, 0.0 * u.y + -1.0 * ud.y, 0.0 * u.z + -1.0 * ud.z}, ud};
     const V vg[2] = {-1.0 * u, u};
-    const double w = ke[10], tension = ke[8], stiff = ke[9] * Ld;
+    const double w = ke[7], tension = ke[5], stiff = ke[6] * Ld;
     for (int k = 0; k < 2; ++k) put(&buf_e_[6 * s + 3 * k], w * (tension * dg[k] + stiff * vg[k]));
   };
-  // The triples' and cells' strain gradients and slope factors depend on z
-  // alone: the first product of a linear solve keeps them (kg_t_, kg_s_),
-  // the others read them back, bit for bit the same numbers. So do the
-  // particles' contact terms (kc_), and the edges' values (kg_e_).
   auto triple = [&](int64_t s) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
@@ -162,8 +161,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
-  // A particle's contact force, its size and slope (kc_, kKc a particle): z's
-  // too, kept like the gradients above; size 0 where it does not touch.
+  // A particle's contact force, its size and slope; size 0 where it does
+  // not touch.
   auto contact_at = [&](int64_t p, double* mine) -> const double* {
     double* kc = keep_ ? &kc_[kKc * p] : mine;
     if (fill) {
