@@ -259,6 +259,9 @@ const BadFile kBadFiles[] = {
     {"dotted_key_table", "[obstacle]\nsize.x = 1\n", 2, {"obstacle.size: expected an array of 3 numbers, got a table"}},
     {"particles_too_few", "[cloth]\nparticles = [2, 100]\n", 2, {"cloth.particles", ">= 3", "[2, 100]"}},
     {"particles_overflow", "[cloth]\nparticles = [100000, 100000]\n", 2, {"cloth.particles", "at most"}},
+    // Within int, beyond what the gather's int32 buffer offsets reach.
+    {"particles_beyond_gather", "[cloth]\nparticles = [20000, 20000]\n", 2,
+     {"cloth.particles", "at most 119304647", "[20000, 20000]"}},
     {"size_zero", "[cloth]\nsize = [1.0, 0.0]\n", 2, {"cloth.size", "> 0"}},
     {"tile_one", "[cloth]\ntile = 1\n", 2, {"cloth.tile: must be >= 2, got 1"}},
     {"height_below_floor", "[cloth]\nheight = -0.1\n", 2, {"cloth.height", ">= 0"}},

@@ -4,6 +4,7 @@
 #include "solver/kernels.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace drape {
@@ -162,6 +163,8 @@ void ListCuts::rebalance() {
 
 void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned,
                         ActiveLists& out, const std::vector<int64_t>& ring) {
+  static std::atomic<uint64_t> builds{0};
+  out.stamp = ++builds;
   out.tiles = owned;
   auto edge = [&](int64_t s) { return c.edge_on[s] != 0; };
   auto triple = [&](int64_t s) { return c.triple_on[s] != 0; };

@@ -80,6 +80,9 @@ struct ActiveLists {
   // a coarser side): positions follow their ends; forces and gradients on
   // them pass to their ends. Empty without AMRC.
   std::vector<HangingLink> hanging;
+  // A number no other build of any lists had: whoever keeps data in list
+  // order (the stiffness product's buffers) sees that the lists changed.
+  uint64_t stamp = 0;
 };
 
 // Builds the lists over `owned_tiles` (ascending tile ids) from the cloth's

@@ -24,6 +24,7 @@
 #include <stdexcept>
 
 #include "io/error.hpp"
+#include "solver/cloth.hpp"
 
 namespace drape {
 namespace {
@@ -548,8 +549,8 @@ void validate(const Config& cfg, const Scene& s) {
   check(!s.name.empty(), "name", "must not be empty");
   check(c.particles[0] >= 3 && c.particles[1] >= 3, "cloth.particles",
         "NI and NJ must each be >= 3, got " + format_array(c.particles));
-  check(int64_t(c.particles[0]) * c.particles[1] <= INT_MAX, "cloth.particles",
-        "NI x NJ must be at most " + std::to_string(INT_MAX) + ", got " + format_array(c.particles));
+  check(int64_t(c.particles[0]) * c.particles[1] <= kMaxParticles, "cloth.particles",
+        "NI x NJ must be at most " + std::to_string(kMaxParticles) + ", got " + format_array(c.particles));
   check(all_positive(c.size), "cloth.size", "sizes must be > 0, got " + format_array(c.size));
   check(!c.fabric.empty(), "cloth.fabric", "must not be empty");
   check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));

@@ -32,6 +32,24 @@ struct Grid {
   int64_t stride(int d) const { return d == 0 ? nj : 1; }
 };
 
+// The evaluator's per-element buffers, in doubles an element: it writes its
+// contribution to each of its particles there (3 doubles a particle).
+constexpr int kEdgeSlot = 6, kTripleSlot = 9, kShearSlot = 12;
+// The most particles a cloth may have: GatherRow's int32 offsets must reach
+// the end of the triple buffer (2 triples a particle).
+constexpr int64_t kMaxParticles = INT32_MAX / (2 * kTripleSlot);
+
+// Where one particle's contributions lie in those buffers, in the gather's
+// fixed order (cost.hpp): per direction d, the edge from it, the edge into
+// it, then the triples centred at its next, at itself and at its previous
+// particle; then the cell it is the lower corner of, and the cells it is
+// corner 1, 2, 3 of. -1 where there is no such element. 64 bytes: one cache
+// line where the neighbour tables and switches took about ten.
+struct alignas(64) GatherRow {
+  static constexpr int kPerDirection = 5, kShear = 10;
+  int32_t at[16];
+};
+
 // Offsets of the unknown blocks in z.
 struct Layout {
   int64_t n = 0;

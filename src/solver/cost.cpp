@@ -41,6 +41,10 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   k_slope_.assign(5 * n, 0.0);
   k_tension_.assign(2 * n, 0.0);
   keep_products(true);
+  rows_.resize(n);
+  at_e_.assign(2 * n, -1);
+  at_t_.assign(2 * n, -1);
+  at_s_.assign(n, -1);
   hres_.assign(3 * n, 0.0);
   hpend_.assign(3 * n, 0.0);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
@@ -135,7 +139,7 @@ void Evaluator::particle_residual(int64_t p, const double* z) {
   for (int k = 0; k < 3; ++k)
     r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
            fc[k];
-  gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) {
+  gather(p, [&](const double* v) {
     r[0] += v[0];
     r[1] += v[1];
     r[2] += v[2];
@@ -235,7 +239,7 @@ void Evaluator::particle_gradient(int64_t p, const double* z, double* grad) {
     const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
-  gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) {
+  gather(p, [&](const double* v) {
     g[0] += v[0];
     g[1] += v[1];
     g[2] += v[2];
@@ -279,7 +283,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * h, fc, &rho_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
-    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) {
+    gather(h, [&](const double* c) {
       v[0] += c[0];
       v[1] += c[1];
       v[2] += c[2];
@@ -310,7 +314,7 @@ void Evaluator::hanging_forces(const double* z) {
     double f[3], fc[3];
     contact_force(m_.contact, z + 3 * g.h, fc);
     for (int k = 0; k < 3; ++k) f[k] = hres_[3 * g.h + k] - fc[k];
-    gather(g.h, buf_e_, buf_t_, buf_s_, [&](const double* v) {
+    gather(g.h, [&](const double* v) {
       f[0] += v[0];
       f[1] += v[1];
       f[2] += v[2];
@@ -409,14 +413,14 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
-    gather(p, buf_e_, buf_t_, buf_s_, [&](const double* v) { dsum += v[0]; });
+    gather(p, [&](const double* v) { dsum += v[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   });
   hanging_into_ends(diag, [&](int64_t h, double* v) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
     double dsum = slope * slope * inv2;
-    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
+    gather(h, [&](const double* c) { dsum += c[0]; });
     v[0] = v[1] = v[2] = dsum;
   }, 2.0, 1.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.

@@ -132,9 +132,18 @@ class Evaluator {
   }
   template <class FE, class FT, class FS, class Between, class FP>
   void passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp);
+  template <class Visit>
+  void for_gathered(int64_t p, Visit&& visit) const;
   template <class Add>
-  void gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
-              const std::vector<double>& s, Add&& add) const;
+  void gather(int64_t p, Add&& add) const;
+  template <class Add>
+  void gather_listed(const GatherRow& row, Add&& add) const;
+  // p's row for buffers in list order (any active particle: the hanging
+  // ones, which have no place in the particle list, too); false if one of
+  // its elements is in no list (left out of the row).
+  bool listed_row(int64_t p, GatherRow& row) const;
+  // Refreshes rows_ and the slot maps when the lists have changed.
+  void list_rows();
   CostTerms reduce_costs();
   // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
   // order: the element forces on them into their ends' residuals; residuals
@@ -154,7 +163,7 @@ class Evaluator {
   const LoopPolicy& pol_;
   const Reducer& red_;
   const Halo& halo_;
-  static constexpr int kShearSlot = 12;           // a shear cell: 4 corners x 3
+  static_assert(kShearSlot == 12 && kEdgeSlot == 6 && kTripleSlot == 9, "buffer slots: 2, 3, 4 particles x 3");
   std::vector<double> buf_e_, buf_t_, buf_s_;     // per-slot contributions to particles (6, 9, 12)
   std::vector<double> cost_p_, cost_e_, cost_t_, cost_s_;
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
@@ -172,30 +181,66 @@ class Evaluator {
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
   // An edge's numbers into ke, from its ends' positions.
   void edge_kept(int64_t s, const double* za, const double* zb, double* ke) const;
+  // stiffness_product keeps its buffers and z-only numbers in list order:
+  // an element's at its position in its list (the ring's after this rank's),
+  // so on a coarse AMRC mesh, whose slots lie far apart, an element pass
+  // streams through them and a particle finds its elements' entries on
+  // nearby lines. rows_: the owned particles' entries (by position in the
+  // particle list); at_e_, at_t_, at_s_: slot -> position, -1 where the slot
+  // is in no list; for rows_stamp_'s lists.
+  std::vector<GatherRow> rows_;
+  std::vector<int32_t> at_e_, at_t_, at_s_;
+  uint64_t rows_stamp_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
 };
 
-// Visits the per-slot buffer entries that belong to particle p, always in the
-// same order: this fixed order is what makes the sums reproducible.
-template <class Add>
-void Evaluator::gather(int64_t p, const std::vector<double>& e, const std::vector<double>& t,
-                       const std::vector<double>& s, Add&& add) const {
+// The element buffer entries particle p gathers, always in the same order:
+// this fixed order is what makes the sums reproducible. visit(place, kind,
+// slot, part): place 0-13 in that order (GatherRow), kind 0 edge, 1 triple,
+// 2 shear cell, and p's part in the element (its 3 doubles at 3 part).
+template <class Visit>
+void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
   for (int d = 0; d < 2; ++d) {
     const int64_t pv = c_.prev[d][p], nx = c_.next[d][p];
-    if (c_.edge_on[2 * p + d]) add(&e[6 * (2 * p + d)]);
-    if (pv >= 0 && c_.edge_on[2 * pv + d]) add(&e[6 * (2 * pv + d) + 3]);
-    if (nx >= 0 && c_.triple_on[2 * nx + d]) add(&t[9 * (2 * nx + d)]);
-    if (c_.triple_on[2 * p + d]) add(&t[9 * (2 * p + d) + 3]);
-    if (pv >= 0 && c_.triple_on[2 * pv + d]) add(&t[9 * (2 * pv + d) + 6]);
+    const int at = GatherRow::kPerDirection * d;
+    if (c_.edge_on[2 * p + d]) visit(at, 0, 2 * p + d, 0);
+    if (pv >= 0 && c_.edge_on[2 * pv + d]) visit(at + 1, 0, 2 * pv + d, 1);
+    if (nx >= 0 && c_.triple_on[2 * nx + d]) visit(at + 2, 1, 2 * nx + d, 0);
+    if (c_.triple_on[2 * p + d]) visit(at + 3, 1, 2 * p + d, 1);
+    if (pv >= 0 && c_.triple_on[2 * pv + d]) visit(at + 4, 1, 2 * pv + d, 2);
   }
-  if (c_.shear_on[p]) add(&s[kShearSlot * p]);
+  if (c_.shear_on[p]) visit(GatherRow::kShear, 2, p, 0);
   // p as corner 1, 2, 3 (along i, along j, across) of the cells below it.
   for (int k = 0; k < 3; ++k) {
     const int64_t q = c_.corner_of[k][p];
-    if (q >= 0) add(&s[kShearSlot * q + 3 * (k + 1)]);
+    if (q >= 0) visit(GatherRow::kShear + k + 1, 2, q, k + 1);
   }
+}
+
+// Particle p's entries of the buffers in slot order.
+template <class Add>
+void Evaluator::gather(int64_t p, Add&& add) const {
+  const double* buf[3] = {buf_e_.data(), buf_t_.data(), buf_s_.data()};
+  static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
+  for_gathered(p, [&](int, int kind, int64_t s, int part) { add(buf[kind] + width[kind] * s + 3 * part); });
+}
+
+// An owned particle's entries of the buffers in list order, from its row.
+template <class Add>
+void Evaluator::gather_listed(const GatherRow& row, Add&& add) const {
+  const int32_t* at = row.at;
+  const double *e = buf_e_.data(), *t = buf_t_.data(), *s = buf_s_.data();
+  for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
+    if (at[0] >= 0) add(e + at[0]);
+    if (at[1] >= 0) add(e + at[1]);
+    if (at[2] >= 0) add(t + at[2]);
+    if (at[3] >= 0) add(t + at[3]);
+    if (at[4] >= 0) add(t + at[4]);
+  }
+  for (int k = 0; k < 4; ++k)
+    if (at[k] >= 0) add(s + at[k]);
 }
 
 template <class FE, class FT, class FS, class Between, class FP>
@@ -206,12 +251,14 @@ void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
                        &cuts_for<FS>(lists_.shears),  &cuts_for<FS>(lists_.ring_shears), nullptr};
   if constexpr (!std::is_same_v<FP, std::nullptr_t>) cuts[6] = &cuts_for<FP>(lists_.particles);
   timed_region([&](RegionTime& rt) {
+    // A body that takes positions counts the ring's on after this rank's.
     item_loops(lists_.edges, pol_, *cuts[0], fe);
-    if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe);
+    if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe, lists_.edges.size());
     item_loops(lists_.triples, pol_, *cuts[2], ft);
-    if (lists_.ring_triples.size() > 0) item_loops(lists_.ring_triples, ring, *cuts[3], ft);
+    if (lists_.ring_triples.size() > 0)
+      item_loops(lists_.ring_triples, ring, *cuts[3], ft, lists_.triples.size());
     item_loops(lists_.shears, pol_, *cuts[4], fs);
-    if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs);
+    if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs, lists_.shears.size());
     if constexpr (!std::is_same_v<FP, std::nullptr_t>) {
       const double w0 = omp_get_wtime();
 #pragma omp barrier

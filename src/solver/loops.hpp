@@ -79,6 +79,16 @@ void for_each_listed(const IndexRuns& runs, F&& f) {
   });
 }
 
+// Runs a loop body on items[k]; a body that takes two arguments also gets
+// base + k, the item's position in the list (data kept in list order).
+template <class F>
+inline void visit_item(F& f, const int64_t* items, int64_t k, int64_t base) {
+  if constexpr (std::is_invocable_v<F&, int64_t, int64_t>)
+    f(items[k], base + k);
+  else
+    f(items[k]);
+}
+
 struct LoopPolicy {
   Schedule schedule = Schedule::ActiveLists;
   int chunk = 4;  // tiles per chunk (dynamic)
@@ -118,8 +128,9 @@ ListCuts& cuts_for(const ActiveList& list) {
 // this kind of pass (c.rebalance() after the region), then the list's tail in
 // small pieces to whichever thread is free. Otherwise whole tiles, with
 // OpenMP's static, dynamic or guided schedule.
+// Positions handed to the body count from `base`.
 template <class F>
-void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& f) {
+void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& f, int64_t base = 0) {
   const int64_t* items = list.items.data();
   if (pol.schedule == Schedule::ActiveLists) {
     const int chunks = int(c.cut.size()) - 1;
@@ -131,13 +142,14 @@ void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& 
 #pragma omp for schedule(static, 1) nowait
     for (int q = 0; q < chunks; ++q) {
       const double t0 = omp_get_wtime();
-      for (int64_t k = cut[q]; k < cut[q + 1]; ++k) f(items[k]);
+      for (int64_t k = cut[q]; k < cut[q + 1]; ++k) visit_item(f, items, k, base);
       seconds[q] = omp_get_wtime() - t0;
     }
     // The tail, taken piece by piece by whoever is done first.
 #pragma omp for schedule(dynamic, 1) nowait
     for (int q = 0; q < pieces; ++q)
-      for (int64_t k = head + tail * q / pieces; k < head + tail * (q + 1) / pieces; ++k) f(items[k]);
+      for (int64_t k = head + tail * q / pieces; k < head + tail * (q + 1) / pieces; ++k)
+        visit_item(f, items, k, base);
     return;
   }
   const int nt = int(list.tile_begin.size()) - 1;
@@ -148,17 +160,17 @@ void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& 
     case Schedule::Static:
 #pragma omp for schedule(static) nowait
       for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) visit_item(f, items, k, base);
       break;
     case Schedule::Dynamic:
 #pragma omp for schedule(dynamic, chunk) nowait
       for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) visit_item(f, items, k, base);
       break;
     case Schedule::Guided:
 #pragma omp for schedule(guided) nowait
       for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) f(items[k]);
+        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) visit_item(f, items, k, base);
       break;
   }
 }

@@ -3,6 +3,7 @@
 // and fixed-order gathers as the cost (deterministic for any thread count).
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "solver/cost.hpp"
 #include "solver/kernels.hpp"
@@ -99,7 +100,41 @@ void Evaluator::edge_kept(int64_t s, const double* za, const double* zb, double*
   ke[7] = c_.edge_width[s];
 }
 
+bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
+  std::fill(row.at, row.at + 16, -1);
+  const int32_t* pos[3] = {at_e_.data(), at_t_.data(), at_s_.data()};
+  static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
+  bool listed = true;
+  for_gathered(p, [&](int place, int kind, int64_t s, int part) {
+    if (pos[kind][s] >= 0)
+      row.at[place] = width[kind] * pos[kind][s] + 3 * part;
+    else
+      listed = false;
+  });
+  return listed;
+}
+
+void Evaluator::list_rows() {
+  if (rows_stamp_ == lists_.stamp && lists_.stamp != 0) return;
+  rows_stamp_ = lists_.stamp;
+  kg_ready_ = false;  // kept in the old lists' order
+  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at) {
+    std::fill(at.begin(), at.end(), -1);
+    for (int64_t k = 0; k < own.size(); ++k) at[own.items[k]] = int32_t(k);
+    for (int64_t k = 0; k < ring.size(); ++k) at[ring.items[k]] = int32_t(own.size() + k);
+  };
+  place(lists_.edges, lists_.ring_edges, at_e_);
+  place(lists_.triples, lists_.ring_triples, at_t_);
+  place(lists_.shears, lists_.ring_shears, at_s_);
+  const ActiveList& pl = lists_.particles;
+  int unlisted = 0;
+#pragma omp parallel for schedule(static) reduction(+ : unlisted)
+  for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
+  if (unlisted > 0) throw std::logic_error("stiffness_product: active elements missing from the lists");
+}
+
 void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
+  list_rows();
   halo_.exchange(v, Halo::kPositions);
   interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
   const Layout& L = c_.layout;
@@ -109,10 +144,10 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   // first product of a linear solve keeps it, the others read it back, bit for
   // bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
-  auto edge = [&](int64_t s) {
+  auto edge = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1, q = c_.next[s & 1][p];
     double mine[kKgEdge];
-    double* ke = keep_ ? &kg_e_[kKgEdge * s] : mine;
+    double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (fill) edge_kept(s, z + 3 * p, z + 3 * q, ke);
     // edge_length on duals at (z, v), its eps parts written out in the same
     // operations, with the value parts kept: bit for bit its numbers.
@@ -126,14 +161,14 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const V dg[2] = {{0.0 * u.x + -1.0 * ud.x, 0.0 * u.y + -1.0 * ud.y, 0.0 * u.z + -1.0 * ud.z}, ud};
     const V vg[2] = {-1.0 * u, u};
     const double w = ke[7], tension = ke[5], stiff = ke[6] * Ld;
-    for (int k = 0; k < 2; ++k) put(&buf_e_[6 * s + 3 * k], w * (tension * dg[k] + stiff * vg[k]));
+    for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], w * (tension * dg[k] + stiff * vg[k]));
   };
-  auto triple = [&](int64_t s) {
+  auto triple = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
     double mine[kKgTriple];
-    double* kg = keep_ ? &kg_t_[kKgTriple * s] : mine;
+    double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (fill) {
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
@@ -142,11 +177,11 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     }
     const V g[3] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7)};
     const double stiff = kg[0] * along(g, ids, 3, v);
-    for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], stiff * g[k]);
+    for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], stiff * g[k]);
   };
-  auto shear = [&](int64_t s) {
+  auto shear = [&](int64_t s, int64_t pos) {
     double mine[kKgCell];
-    double* kg = keep_ ? &kg_s_[kKgCell * s] : mine;
+    double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
     int64_t ids[4];
     if (fill) {
       const CellAt a = cell_at(c_, z, s);
@@ -158,7 +193,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     shear_cell(c_, s, ids);
     const V g[4] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7), load3<double>(kg + 10)};
     const double stiff = kg[0] * along(g, ids, 4, v);
-    for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], stiff * g[k]);
+    for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], stiff * g[k]);
   };
   const double ca = m_.inertia_coeff();
   // A particle's contact force, its size and slope; size 0 where it does
@@ -173,7 +208,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     }
     return kc;
   };
-  auto particle = [&](int64_t p) {
+  auto particle = [&](int64_t p, int64_t pos) {
     double mine[kKc];
     const double* fc = contact_at(p, mine);
     const double fn = fc[3], slope = fc[4];
@@ -184,7 +219,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
     }
-    gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) {
+    gather_listed(rows_[pos], [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
       out[2] += c[2];
@@ -199,7 +234,12 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const double* vh = v + 3 * h;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
     for (int k = 0; k < 3; ++k) out[k] = fn > 0 ? slope * nv * fc[k] / fn : 0.0;
-    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) {
+    // Hanging particles have no place in the particle list. One far from
+    // this rank's tiles has elements in no list here: its result is not
+    // meaningful (as any entry this rank does not own) and reaches no owned one.
+    GatherRow row;
+    listed_row(h, row);
+    gather_listed(row, [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
       out[2] += c[2];
@@ -250,7 +290,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     double dsum = c_.mass[p] * ca + slope / 3;
-    gather(p, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
+    gather(p, [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
@@ -258,7 +298,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
     double dsum = slope / 3;
-    gather(h, buf_e_, buf_t_, buf_s_, [&](const double* c) { dsum += c[0]; });
+    gather(h, [&](const double* c) { dsum += c[0]; });
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);
 }
