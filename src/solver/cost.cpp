@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 #include "solver/kernels.hpp"
 #include "solver/shear_cell.hpp"
@@ -61,9 +62,48 @@ void Evaluator::keep_products(bool on) {
   kg_ready_ = false;
 }
 
+// ---- the element buffers in list order -----------------------------------
+
+bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
+  std::fill(row.at, row.at + 16, -1);
+  const int32_t* pos[3] = {at_e_.data(), at_t_.data(), at_s_.data()};
+  static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
+  bool listed = true;
+  for_gathered(p, [&](int place, int kind, int64_t s, int part) {
+    if (pos[kind][s] >= 0)
+      row.at[place] = width[kind] * pos[kind][s] + 3 * part;
+    else
+      listed = false;
+  });
+  return listed;
+}
+
+void Evaluator::list_rows() {
+  if (rows_stamp_ == lists_.stamp && lists_.stamp != 0 && rows_hanging_ == lists_.hanging.size()) return;
+  rows_stamp_ = lists_.stamp;
+  rows_hanging_ = lists_.hanging.size();
+  kg_ready_ = false;  // kept in the old lists' order
+  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at) {
+    std::fill(at.begin(), at.end(), -1);
+    for (int64_t k = 0; k < own.size(); ++k) at[own.items[k]] = int32_t(k);
+    for (int64_t k = 0; k < ring.size(); ++k) at[ring.items[k]] = int32_t(own.size() + k);
+  };
+  place(lists_.edges, lists_.ring_edges, at_e_);
+  place(lists_.triples, lists_.ring_triples, at_t_);
+  place(lists_.shears, lists_.ring_shears, at_s_);
+  const ActiveList& pl = lists_.particles;
+  if (size_t(pl.size()) + lists_.hanging.size() > rows_.size())
+    throw std::logic_error("Evaluator: more free and hanging particles than the grid has");
+  int unlisted = 0;
+#pragma omp parallel for schedule(static) reduction(+ : unlisted)
+  for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
+  if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
+  for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i]);
+}
+
 // ---- pass 1: element forces and band costs -------------------------------
 
-void Evaluator::edge_forces(int64_t s, const double* z) {
+void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   const int64_t q = c_.next[d][p];
@@ -71,8 +111,8 @@ void Evaluator::edge_forces(int64_t s, const double* z) {
   const double L = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
   const double f = z[c_.layout.tension() + s];
-  put(&buf_e_[6 * s], g[0], f * w);
-  put(&buf_e_[6 * s + 3], g[1], f * w);
+  put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
+  put(&buf_e_[kEdgeSlot * pos + 3], g[1], f * w);
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
@@ -83,7 +123,7 @@ void Evaluator::edge_forces(int64_t s, const double* z) {
   gf_e_[s] = (sigma + m_.memory * mem) * lam;
 }
 
-void Evaluator::triple_forces(int64_t s, const double* z) {
+void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   V g[3];
@@ -91,7 +131,7 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
   const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]), n, g);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const double f = z[c_.layout.moment() + s];
-  for (int k = 0; k < 3; ++k) put(&buf_t_[9 * s + 3 * k], g[k], f * w);
+  for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
   const BandValue bv = m_.bend[d].at(th / Lm);
   const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
@@ -102,13 +142,13 @@ void Evaluator::triple_forces(int64_t s, const double* z) {
   gf_t_[s] = (sigma + m_.memory * mem) * lam;
 }
 
-void Evaluator::shear_forces(int64_t s, const double* z) {
+void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z) {
   const CellAt a = cell_at(c_, z, s);
   V g[4];
   const double phi = shear_cell(a.x, g);
   const double A = c_.shear_area[s];
   const double f = z[c_.layout.shear() + s];
-  for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * s + 3 * k], g[k], f * A);
+  for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
   const BandValue bv = m_.shear.at(phi);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
@@ -121,7 +161,7 @@ void Evaluator::shear_forces(int64_t s, const double* z) {
 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
-void Evaluator::particle_residual(int64_t p, const double* z) {
+void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z) {
   double* rho = &rho_[3 * p];
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
@@ -139,7 +179,7 @@ void Evaluator::particle_residual(int64_t p, const double* z) {
   for (int k = 0; k < 3; ++k)
     r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
            fc[k];
-  gather(p, [&](const double* v) {
+  gather_listed(row, [&](const double* v) {
     r[0] += v[0];
     r[1] += v[1];
     r[2] += v[2];
@@ -162,7 +202,7 @@ inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) 
 }
 }  // namespace
 
-void Evaluator::edge_gradient(int64_t s, const double* z, double* grad) {
+void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   const int64_t q = c_.next[d][p];
@@ -175,12 +215,12 @@ void Evaluator::edge_gradient(int64_t s, const double* z, double* grad) {
   const V v = rb - ra;
   const V hv = (1.0 / L) * (v - dot(g[1], v) * g[1]);
   const double fw = f * w / m_.force_scale, gq = gq_e_[s];
-  put(&buf_e_[6 * s], (-fw) * hv + gq * g[0], 1.0);
-  put(&buf_e_[6 * s + 3], fw * hv + gq * g[1], 1.0);
+  put(&buf_e_[kEdgeSlot * pos], (-fw) * hv + gq * g[0], 1.0);
+  put(&buf_e_[kEdgeSlot * pos + 3], fw * hv + gq * g[1], 1.0);
   grad[c_.layout.tension() + s] = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[s];
 }
 
-void Evaluator::triple_gradient(int64_t s, const double* z, double* grad) {
+void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
@@ -199,13 +239,13 @@ void Evaluator::triple_gradient(int64_t s, const double* z, double* grad) {
   double gr = 0;
   for (int k = 0; k < 3; ++k) {
     const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
-    put(&buf_t_[9 * s + 3 * k], fw * hr + gq * g, 1.0);
+    put(&buf_t_[kTripleSlot * pos + 3 * k], fw * hr + gq * g, 1.0);
     gr += dot(g, r[k]);
   }
   grad[c_.layout.moment() + s] = w * gr / m_.force_scale + gf_t_[s];
 }
 
-void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
+void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   int64_t ids[4];
   shear_cell(c_, s, ids);
   V r[4];
@@ -222,7 +262,7 @@ void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
     const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
-    put(&buf_s_[kShearSlot * s + 3 * k], fa * hr + gq * g, 1.0);
+    put(&buf_s_[kShearSlot * pos + 3 * k], fa * hr + gq * g, 1.0);
     gr += dot(g, r[k]);
   }
   grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[s];
@@ -230,7 +270,7 @@ void Evaluator::shear_gradient(int64_t s, const double* z, double* grad) {
 
 // ---- pass 4: gather per free particle ------------------------------------
 
-void Evaluator::particle_gradient(int64_t p, const double* z, double* grad) {
+void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad) {
   const double* rho = &rho_[3 * p];
   double g[3] = {0, 0, 0};
   if (m_.use_newton) {
@@ -239,7 +279,7 @@ void Evaluator::particle_gradient(int64_t p, const double* z, double* grad) {
     const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
-  gather(p, [&](const double* v) {
+  gather_listed(row, [&](const double* v) {
     g[0] += v[0];
     g[1] += v[1];
     g[2] += v[2];
@@ -262,11 +302,13 @@ CostTerms Evaluator::reduce_costs() {
 }
 
 CostTerms Evaluator::evaluate(double* z, double* grad) {
+  list_rows();
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
-  elements_then_particles([&](int64_t s) { edge_forces(s, z); }, [&](int64_t s) { triple_forces(s, z); },
-                          [&](int64_t s) { shear_forces(s, z); }, [&] { hanging_forces(z); },
-                          [&](int64_t p) { particle_residual(p, z); });
+  elements_then_particles([&](int64_t s, int64_t pos) { edge_forces(s, pos, z); },
+                          [&](int64_t s, int64_t pos) { triple_forces(s, pos, z); },
+                          [&](int64_t s, int64_t pos) { shear_forces(s, pos, z); }, [&] { hanging_forces(z); },
+                          [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
   clear_hanging(hres_);
   const CostTerms cost = reduce_costs();
   if (!grad) return cost;
@@ -274,16 +316,17 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   hanging_residuals();
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
-  for_edges([&](int64_t s) { edge_gradient(s, z, grad); });
-  for_triples([&](int64_t s) { triple_gradient(s, z, grad); });
-  for_shears([&](int64_t s) { shear_gradient(s, z, grad); });
-  for_each_item(lists_.particles, pol_, [&](int64_t p) { particle_gradient(p, z, grad); });
+  for_edges([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); });
+  for_triples([&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); });
+  for_shears([&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); });
+  for_each_item(lists_.particles, pol_,
+                [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
   // A hanging particle's gradient: its contact term and its elements'.
-  hanging_into_ends(grad, [&](int64_t h, double* v) {
+  hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * h, fc, &rho_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
-    gather(h, [&](const double* c) {
+    gather_listed(row, [&](const double* c) {
       v[0] += c[0];
       v[1] += c[1];
       v[2] += c[2];
@@ -310,11 +353,12 @@ void Evaluator::clear_hanging(std::vector<double>& a) {
 // no mass of its own) acts on its ends, by the interpolation weights.
 void Evaluator::hanging_forces(const double* z) {
   clear_hanging(hres_);
-  for (const HangingLink& g : lists_.hanging) {  // finest first: forces move on up
+  for (size_t i = 0; i < lists_.hanging.size(); ++i) {  // finest first: forces move on up
+    const HangingLink& g = lists_.hanging[i];
     double f[3], fc[3];
     contact_force(m_.contact, z + 3 * g.h, fc);
     for (int k = 0; k < 3; ++k) f[k] = hres_[3 * g.h + k] - fc[k];
-    gather(g.h, [&](const double* v) {
+    gather_listed(hanging_row(i), [&](const double* v) {
       f[0] += v[0];
       f[1] += v[1];
       f[2] += v[2];
@@ -340,6 +384,7 @@ void Evaluator::hanging_residuals() {
 // ---- diagonal scaling -----------------------------------------------------
 
 void Evaluator::scaling_diagonal(double* z, double* diag) {
+  list_rows();
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
@@ -356,7 +401,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     return std::sqrt(r * r + mu * stop * stop);
   };
   auto outside = [](const Band& b, double f, double q) { return b.excess(f, q).r != 0 ? 1.0 : 0.0; };
-  for_edges([&](int64_t s) {
+  for_edges([&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t q = c_.next[d][p];
@@ -365,11 +410,11 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
     const double eps = L / L0 - 1;
     const double geo = f * w / L, band = w * band_slope(s, m_.stretch[d], f, eps) / L0;
-    for (int k = 0; k < 2; ++k) buf_e_[6 * s + 3 * k] = (2 * geo * geo + band * band) * inv2;
+    for (int k = 0; k < 2; ++k) buf_e_[kEdgeSlot * pos + 3 * k] = (2 * geo * geo + band * band) * inv2;
     const double nf = double(c_.free(p)) + double(c_.free(q));
     diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
   });
-  for_triples([&](int64_t s) {
+  for_triples([&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
@@ -383,14 +428,14 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
       const double geo = f * w * std::sqrt(g2) / Lm;
-      buf_t_[9 * s + 3 * k] = (3 * geo * geo + slope * slope * g2) * inv2;
+      buf_t_[kTripleSlot * pos + 3 * k] = (3 * geo * geo + slope * slope * g2) * inv2;
       nf += c_.free(ids[k]) ? g2 : 0;
     }
     const double lam = w / Lm;
     diag[c_.layout.moment() + s] =
         (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
-  for_shears([&](int64_t s) {
+  for_shears([&](int64_t s, int64_t pos) {
     const CellAt a = cell_at(c_, z, s);
     V g[4];
     const double phi = shear_cell(a.x, g);
@@ -400,7 +445,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     for (int k = 0; k < 4; ++k) {
       const double g2 = dot(g[k], g[k]);
       const double geo = f * A * std::sqrt(g2) / Lr;
-      buf_s_[kShearSlot * s + 3 * k] = (4 * geo * geo + slope * slope * g2) * inv2;
+      buf_s_[kShearSlot * pos + 3 * k] = (4 * geo * geo + slope * slope * g2) * inv2;
       nf += c_.free(a.ids[k]) ? g2 : 0;
     }
     const double lam = A / Lr;
@@ -408,19 +453,19 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
         (A * A * nf + lam * lam * (outside(m_.shear, f, phi) + m_.memory)) * inv2;
   });
   const double ca = m_.inertia_coeff();
-  for_each_item(lists_.particles, pol_, [&](int64_t p) {
+  for_each_item(lists_.particles, pol_, [&](int64_t p, int64_t pos) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
-    gather(p, [&](const double* v) { dsum += v[0]; });
+    gather_listed(rows_[pos], [&](const double* v) { dsum += v[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   });
-  hanging_into_ends(diag, [&](int64_t h, double* v) {
+  hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
     double dsum = slope * slope * inv2;
-    gather(h, [&](const double* c) { dsum += c[0]; });
+    gather_listed(row, [&](const double* c) { dsum += c[0]; });
     v[0] = v[1] = v[2] = dsum;
   }, 2.0, 1.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.
@@ -439,17 +484,17 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 3); j <= std::min(gr.nj - 1, jc + 3); ++j) {
       const int64_t p = gr.id(i, j);
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, z);
-        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, z);
+        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, at_e_[2 * p + d], z);
+        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, at_t_[2 * p + d], z);
       }
-      if (c_.shear_on[p]) shear_forces(p, z);
+      if (c_.shear_on[p]) shear_forces(p, at_s_[p], z);
     }
   double sum = 0;
   for (int i = std::max(0, ic - 2); i <= std::min(gr.ni - 1, ic + 2); ++i)
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
       if (c_.free(p)) {
-        particle_residual(p, z);
+        particle_residual(p, row_of(p), z);
         sum += cost_p_[p];
       }
       for (int d = 0; d < 2; ++d) {

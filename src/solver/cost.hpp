@@ -94,20 +94,22 @@ class Evaluator {
   double force_scale() const { return m_.force_scale; }
 
  private:
-  void edge_forces(int64_t s, const double* z);
-  void triple_forces(int64_t s, const double* z);
-  void shear_forces(int64_t s, const double* z);
-  void particle_residual(int64_t p, const double* z);
-  void edge_gradient(int64_t s, const double* z, double* grad);
-  void triple_gradient(int64_t s, const double* z, double* grad);
-  void shear_gradient(int64_t s, const double* z, double* grad);
-  void particle_gradient(int64_t p, const double* z, double* grad);
+  // Element kernels: slot s at position pos of its list (the ring's after
+  // this rank's), which places its buffer entries (see rows_).
+  void edge_forces(int64_t s, int64_t pos, const double* z);
+  void triple_forces(int64_t s, int64_t pos, const double* z);
+  void shear_forces(int64_t s, int64_t pos, const double* z);
+  void particle_residual(int64_t p, const GatherRow& row, const double* z);
+  void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
+  void triple_gradient(int64_t s, int64_t pos, const double* z, double* grad);
+  void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
+  void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad);
   // Element passes: this rank's elements, then the ghost ring's (split in
   // chunks as active lists whatever the schedule: the ring has no tiles).
   template <class F>
   void for_elements(const ActiveList& owned, const ActiveList& ring, F&& f) {
     for_each_item(owned, pol_, f);
-    if (ring.size() > 0) for_each_item(ring, LoopPolicy{Schedule::ActiveLists, 1}, f);
+    if (ring.size() > 0) for_each_item(ring, LoopPolicy{Schedule::ActiveLists, 1}, f, owned.size());
   }
   template <class F>
   void for_edges(F&& f) { for_elements(lists_.edges, lists_.ring_edges, f); }
@@ -135,13 +137,20 @@ class Evaluator {
   template <class Visit>
   void for_gathered(int64_t p, Visit&& visit) const;
   template <class Add>
-  void gather(int64_t p, Add&& add) const;
-  template <class Add>
   void gather_listed(const GatherRow& row, Add&& add) const;
-  // p's row for buffers in list order (any active particle: the hanging
-  // ones, which have no place in the particle list, too); false if one of
-  // its elements is in no list (left out of the row).
+  // p's row (any active particle: the hanging ones, which have no place in
+  // the particle list, too); false if one of its elements is in no list,
+  // left out of the row. That happens only to a hanging particle far from
+  // this rank's tiles, whose result, like any entry this rank does not own,
+  // is not meaningful and reaches no owned entry.
   bool listed_row(int64_t p, GatherRow& row) const;
+  GatherRow row_of(int64_t p) const {
+    GatherRow r;
+    listed_row(p, r);
+    return r;
+  }
+  // Hanging particle i's (of lists_.hanging): kept after the particle list's.
+  const GatherRow& hanging_row(size_t i) const { return rows_[lists_.particles.size() + i]; }
   // Refreshes rows_ and the slot maps when the lists have changed.
   void list_rows();
   CostTerms reduce_costs();
@@ -164,7 +173,7 @@ class Evaluator {
   const Reducer& red_;
   const Halo& halo_;
   static_assert(kShearSlot == 12 && kEdgeSlot == 6 && kTripleSlot == 9, "buffer slots: 2, 3, 4 particles x 3");
-  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-slot contributions to particles (6, 9, 12)
+  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (6, 9, 12), list order
   std::vector<double> cost_p_, cost_e_, cost_t_, cost_s_;
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
@@ -181,16 +190,19 @@ class Evaluator {
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
   // An edge's numbers into ke, from its ends' positions.
   void edge_kept(int64_t s, const double* za, const double* zb, double* ke) const;
-  // stiffness_product keeps its buffers and z-only numbers in list order:
-  // an element's at its position in its list (the ring's after this rank's),
-  // so on a coarse AMRC mesh, whose slots lie far apart, an element pass
-  // streams through them and a particle finds its elements' entries on
-  // nearby lines. rows_: the owned particles' entries (by position in the
-  // particle list); at_e_, at_t_, at_s_: slot -> position, -1 where the slot
-  // is in no list; for rows_stamp_'s lists.
+  // The element buffers (and stiffness_product's z-only numbers) are in
+  // list order: an element's at its position in its list (the ring's after
+  // this rank's), so on a coarse AMRC mesh, whose slots lie far apart, an
+  // element pass streams through them and a particle finds its elements'
+  // entries on nearby lines. rows_: each owned particle's entries (by its
+  // position in the particle list), then each hanging particle's
+  // (hanging_row; free and hanging particles together are at most the
+  // grid's); at_e_, at_t_, at_s_: slot -> position, -1 where the slot is in
+  // no list. For rows_stamp_'s lists and rows_hanging_ hanging particles.
   std::vector<GatherRow> rows_;
   std::vector<int32_t> at_e_, at_t_, at_s_;
   uint64_t rows_stamp_ = 0;
+  size_t rows_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
@@ -219,15 +231,7 @@ void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
   }
 }
 
-// Particle p's entries of the buffers in slot order.
-template <class Add>
-void Evaluator::gather(int64_t p, Add&& add) const {
-  const double* buf[3] = {buf_e_.data(), buf_t_.data(), buf_s_.data()};
-  static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
-  for_gathered(p, [&](int, int kind, int64_t s, int part) { add(buf[kind] + width[kind] * s + 3 * part); });
-}
-
-// An owned particle's entries of the buffers in list order, from its row.
+// A particle's entries of the element buffers, from its row.
 template <class Add>
 void Evaluator::gather_listed(const GatherRow& row, Add&& add) const {
   const int32_t* at = row.at;
@@ -278,7 +282,7 @@ void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
       if (cuts[k]) cuts[k]->rebalance();
 }
 
-// Per-particle results at hanging particles (own(h, v) computes h's) go to
+// Per-particle results at hanging particles (own(h, row, v) computes h's) go to
 // their ends with the weights to `power` (1: gradients and K v; 2: diagonals);
 // the hanging entries themselves are set to `fill` (0 for a gradient or K v,
 // 1 for a diagonal, like every other entry that is not an unknown).
@@ -286,9 +290,10 @@ template <class Own>
 inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, double fill) {
   if (lists_.hanging.empty()) return;
   clear_hanging(hpend_);
-  for (const HangingLink& g : lists_.hanging) {
+  for (size_t i = 0; i < lists_.hanging.size(); ++i) {
+    const HangingLink& g = lists_.hanging[i];
     double v[3];
-    own(g.h, v);
+    own(g.h, hanging_row(i), v);
     const double wa = std::pow(1 - g.t, power), wb = std::pow(g.t, power);
     for (int k = 0; k < 3; ++k) {
       v[k] += hpend_[3 * g.h + k];

@@ -177,9 +177,9 @@ void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& 
 
 // One pass in a parallel region of its own.
 template <class F>
-void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f) {
+void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f, int64_t base = 0) {
   ListCuts& c = cuts_for<F>(list);
-  timed_region([&] { item_loops(list, pol, c, f); });
+  timed_region([&] { item_loops(list, pol, c, f, base); });
   if (pol.schedule == Schedule::ActiveLists) c.rebalance();
 }
 

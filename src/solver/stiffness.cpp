@@ -3,7 +3,6 @@
 // and fixed-order gathers as the cost (deterministic for any thread count).
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 #include "solver/cost.hpp"
 #include "solver/kernels.hpp"
@@ -100,39 +99,6 @@ void Evaluator::edge_kept(int64_t s, const double* za, const double* zb, double*
   ke[7] = c_.edge_width[s];
 }
 
-bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
-  std::fill(row.at, row.at + 16, -1);
-  const int32_t* pos[3] = {at_e_.data(), at_t_.data(), at_s_.data()};
-  static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
-  bool listed = true;
-  for_gathered(p, [&](int place, int kind, int64_t s, int part) {
-    if (pos[kind][s] >= 0)
-      row.at[place] = width[kind] * pos[kind][s] + 3 * part;
-    else
-      listed = false;
-  });
-  return listed;
-}
-
-void Evaluator::list_rows() {
-  if (rows_stamp_ == lists_.stamp && lists_.stamp != 0) return;
-  rows_stamp_ = lists_.stamp;
-  kg_ready_ = false;  // kept in the old lists' order
-  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at) {
-    std::fill(at.begin(), at.end(), -1);
-    for (int64_t k = 0; k < own.size(); ++k) at[own.items[k]] = int32_t(k);
-    for (int64_t k = 0; k < ring.size(); ++k) at[ring.items[k]] = int32_t(own.size() + k);
-  };
-  place(lists_.edges, lists_.ring_edges, at_e_);
-  place(lists_.triples, lists_.ring_triples, at_t_);
-  place(lists_.shears, lists_.ring_shears, at_s_);
-  const ActiveList& pl = lists_.particles;
-  int unlisted = 0;
-#pragma omp parallel for schedule(static) reduction(+ : unlisted)
-  for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
-  if (unlisted > 0) throw std::logic_error("stiffness_product: active elements missing from the lists");
-}
-
 void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   list_rows();
   halo_.exchange(v, Halo::kPositions);
@@ -227,18 +193,13 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
-  hanging_into_ends(kv, [&](int64_t h, double* out) {  // P^T K P: no mass at h
+  hanging_into_ends(kv, [&](int64_t h, const GatherRow& row, double* out) {  // P^T K P: no mass at h
     double mine[kKc];
     const double* fc = contact_at(h, mine);
     const double fn = fc[3], slope = fc[4];
     const double* vh = v + 3 * h;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
     for (int k = 0; k < 3; ++k) out[k] = fn > 0 ? slope * nv * fc[k] / fn : 0.0;
-    // Hanging particles have no place in the particle list. One far from
-    // this rank's tiles has elements in no list here: its result is not
-    // meaningful (as any entry this rank does not own) and reaches no owned one.
-    GatherRow row;
-    listed_row(h, row);
     gather_listed(row, [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
@@ -249,12 +210,13 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
 }
 
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
+  list_rows();
   kg_ready_ = false;  // a new z: stiffness_product computes its gradients again
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   // Per element and particle: the diagonal of its stiffness block, in the
   // first entry of the particle's buffer slot, gathered below.
-  auto edge = [&](int64_t s) {
+  auto edge = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[2];
@@ -264,9 +226,9 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     k_tension_[s] = std::max(0.0, st.f);
     k_slope_[s] = st.df_dq;
     for (int k = 0; k < 2; ++k)
-      buf_e_[6 * s + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
+      buf_e_[kEdgeSlot * pos + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
   };
-  auto triple = [&](int64_t s) {
+  auto triple = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[3];
@@ -275,30 +237,30 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
     const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / Lm).df_dq;
     k_slope_[L.moment() - fo + s] = slope;
-    for (int k = 0; k < 3; ++k) buf_t_[9 * s + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
+    for (int k = 0; k < 3; ++k) buf_t_[kTripleSlot * pos + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   };
-  auto shear = [&](int64_t s) {
+  auto shear = [&](int64_t s, int64_t pos) {
     const CellAt a = cell_at(c_, z, s);
     V g[4];
     const double phi = shear_cell(a.x, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
     k_slope_[L.shear() - fo + s] = slope;
-    for (int k = 0; k < 4; ++k) buf_s_[kShearSlot * s + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
+    for (int k = 0; k < 4; ++k) buf_s_[kShearSlot * pos + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
   };
   const double ca = m_.inertia_coeff();
-  auto particle = [&](int64_t p) {
+  auto particle = [&](int64_t p, int64_t pos) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     double dsum = c_.mass[p] * ca + slope / 3;
-    gather(p, [&](const double* c) { dsum += c[0]; });
+    gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
-  hanging_into_ends(diag, [&](int64_t h, double* out) {
+  hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* out) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
     double dsum = slope / 3;
-    gather(h, [&](const double* c) { dsum += c[0]; });
+    gather_listed(row, [&](const double* c) { dsum += c[0]; });
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);
 }
