@@ -285,5 +285,49 @@ TEST(Stiffness, KeptGradientsFollowZ) {
   }
 }
 
+
+// The element buffers are kept in list order (the ring's after this rank's),
+// each particle reading its entries from a row built from the lists: when
+// AMRC changes the mesh under an evaluator, as the drape program does between
+// steps, the evaluator must follow. After a refine, the same evaluator gives
+// bit for bit what one built on the new mesh gives.
+TEST(Evaluator, FollowsItsListsAcrossAMeshChange) {
+  World w = random_world(21, true);
+  Evaluator& ev = w.loop->evaluator();
+  const size_t n = w.cloth.z.size();
+  double* z = w.cloth.z.data();
+  std::vector<double> v(n, 0.0), g1(n), g2(n), d1(n), d2(n), k1(n), k2(n);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (double& x : v) x = u(rng);
+  auto run = [&](Evaluator& e, std::vector<double>& g, std::vector<double>& d, std::vector<double>& kv) {
+    const double cost = e.evaluate(z, g.data()).total();
+    e.stiffness_diagonal(z, d.data());
+    std::vector<double> vv = v;
+    e.stiffness_product(z, vv.data(), kv.data());
+    return cost;
+  };
+  run(ev, g1, d1, k1);  // rows and kept numbers for the first mesh
+  const int64_t before = w.lists.particles.size();
+  std::vector<Cell> leaves;
+  w.tree->leaves(leaves);
+  const auto coarse = std::find_if(leaves.begin(), leaves.end(), [](const Cell& c) { return c.level > 0; });
+  ASSERT_NE(coarse, leaves.end());
+  w.tree->refine(*coarse);
+  apply_tree(*w.tree, w.cloth, w.fabric.density, w.scene.cloth.shear);
+  std::vector<int> owned(w.tiling.count());
+  for (int t = 0; t < w.tiling.count(); ++t) owned[t] = t;
+  build_active_lists(w.cloth, w.tiling, owned, w.lists);
+  hanging_links(*w.tree, w.lists.hanging);
+  w.loop->freeze_bend_axes();  // the new triples' axes
+  ASSERT_GT(w.lists.particles.size(), before) << "the refine added no particles: the test does not test";
+  Evaluator fresh(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red);
+  const double c1 = run(ev, g1, d1, k1), c2 = run(fresh, g2, d2, k2);
+  EXPECT_EQ(c1, c2);
+  EXPECT_EQ(g1, g2);
+  EXPECT_EQ(d1, d2);
+  EXPECT_EQ(k1, k2);
+}
+
 }  // namespace
 }  // namespace drape::test

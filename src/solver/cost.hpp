@@ -8,9 +8,9 @@
 // Unknowns: positions of free particles and the force of every active element.
 //
 // Evaluation runs in passes over the active lists; elements write their
-// contributions into per-slot buffers and each particle gathers its own in a
-// fixed order, so no two threads write one value (no atomics) and results are
-// the same for any thread count or schedule.
+// contributions into buffers kept in list order and each particle gathers its
+// own in a fixed order, so no two threads write one value (no atomics) and
+// results are the same for any thread count or schedule.
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
