@@ -46,6 +46,9 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   at_e_.assign(2 * n, -1);
   at_t_.assign(2 * n, -1);
   at_s_.assign(n, -1);
+  nb_e_.assign(2 * n, -1);
+  nb_t_.assign(4 * n, -1);
+  nb_s_.assign(3 * n, -1);
   hres_.assign(3 * n, 0.0);
   hpend_.assign(3 * n, 0.0);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
@@ -91,6 +94,20 @@ void Evaluator::list_rows() {
   place(lists_.edges, lists_.ring_edges, at_e_);
   place(lists_.triples, lists_.ring_triples, at_t_);
   place(lists_.shears, lists_.ring_shears, at_s_);
+  // Each element's neighbours, at its position (the ring's after the owned).
+  auto ends = [](const ActiveList& own, const ActiveList& ring, auto&& put) {
+    for (int64_t k = 0; k < own.size(); ++k) put(own.items[k], k);
+    for (int64_t k = 0; k < ring.size(); ++k) put(ring.items[k], own.size() + k);
+  };
+  ends(lists_.edges, lists_.ring_edges,
+       [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
+  ends(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
+    nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
+    nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
+  });
+  ends(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
+    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
+  });
   const ActiveList& pl = lists_.particles;
   if (size_t(pl.size()) + lists_.hanging.size() > rows_.size())
     throw std::logic_error("Evaluator: more free and hanging particles than the grid has");
@@ -106,7 +123,7 @@ void Evaluator::list_rows() {
 void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
-  const int64_t q = c_.next[d][p];
+  const int64_t q = nb_e_[pos];
   V g[2];
   const double L = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
@@ -124,11 +141,12 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z) {
 }
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z) {
-  const int64_t p = s >> 1;
   const int d = int(s & 1);
+  int64_t ids[3];
+  triple_ids(s, pos, ids);
   V g[3];
   const V n = load3<double>(&c_.bend_axis[3 * s]);
-  const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]), n, g);
+  const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const double f = z[c_.layout.moment() + s];
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
@@ -143,7 +161,9 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z) {
 }
 
 void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z) {
-  const CellAt a = cell_at(c_, z, s);
+  int64_t ids[4];
+  cell_ids(s, pos, ids);
+  const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
   const double A = c_.shear_area[s];
@@ -204,8 +224,7 @@ inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) 
 
 void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   const int64_t p = s >> 1;
-  const int d = int(s & 1);
-  const int64_t q = c_.next[d][p];
+  const int64_t q = nb_e_[pos];
   V g[2];
   const V xa = at(z, p), xb = at(z, q);
   const double L = edge_length(xa, xb, g);
@@ -221,9 +240,8 @@ void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* g
 }
 
 void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
-  const int64_t p = s >> 1;
-  const int d = int(s & 1);
-  const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
+  int64_t ids[3];
+  triple_ids(s, pos, ids);
   V r[3];
   V3<Dual> xd[3];
   for (int k = 0; k < 3; ++k) {
@@ -247,7 +265,7 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
 
 void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   int64_t ids[4];
-  shear_cell(c_, s, ids);
+  cell_ids(s, pos, ids);
   V r[4];
   V3<Dual> xd[4];
   for (int k = 0; k < 4; ++k) {
@@ -404,7 +422,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   for_edges([&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
-    const int64_t q = c_.next[d][p];
+    const int64_t q = nb_e_[pos];
     V g[2];
     const double L = edge_length(at(z, p), at(z, q), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
@@ -415,9 +433,9 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
   });
   for_triples([&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1;
     const int d = int(s & 1);
-    const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
+    int64_t ids[3];
+    triple_ids(s, pos, ids);
     V g[3];
     const V n = load3<double>(&c_.bend_axis[3 * s]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
@@ -436,7 +454,9 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
         (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
   for_shears([&](int64_t s, int64_t pos) {
-    const CellAt a = cell_at(c_, z, s);
+    int64_t ids[4];
+    cell_ids(s, pos, ids);
+    const CellAt a = cell_at(ids, z);
     V g[4];
     const double phi = shear_cell(a.x, g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];

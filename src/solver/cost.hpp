@@ -201,6 +201,19 @@ class Evaluator {
   // no list. For rows_stamp_'s lists and rows_hanging_ hanging particles.
   std::vector<GatherRow> rows_;
   std::vector<int32_t> at_e_, at_t_, at_s_;
+  // The neighbour tables' entries each element reads, in list order too:
+  // an edge's far end, a triple's previous and next particles, a cell's
+  // corners 1-3 (the tables' own lines are one per element on a coarse mesh).
+  std::vector<int32_t> nb_e_, nb_t_, nb_s_;
+  void triple_ids(int64_t s, int64_t pos, int64_t ids[3]) const {
+    ids[0] = nb_t_[2 * pos];
+    ids[1] = s >> 1;
+    ids[2] = nb_t_[2 * pos + 1];
+  }
+  void cell_ids(int64_t s, int64_t pos, int64_t ids[4]) const {
+    ids[0] = s;
+    for (int k = 0; k < 3; ++k) ids[k + 1] = nb_s_[3 * pos + k];
+  }
   uint64_t rows_stamp_ = 0;
   size_t rows_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends

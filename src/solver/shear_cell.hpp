@@ -13,11 +13,20 @@ struct CellAt {
   V3<double> x[4];
 };
 
-inline CellAt cell_at(const Cloth& c, const double* z, int64_t s) {
+// The cell with corners ids (slot, along i, along j, across) at positions z.
+inline CellAt cell_at(const int64_t ids[4], const double* z) {
   CellAt a;
-  shear_cell(c, s, a.ids);
-  for (int k = 0; k < 4; ++k) a.x[k] = load3<double>(z + 3 * a.ids[k]);
+  for (int k = 0; k < 4; ++k) {
+    a.ids[k] = ids[k];
+    a.x[k] = load3<double>(z + 3 * ids[k]);
+  }
   return a;
+}
+
+inline CellAt cell_at(const Cloth& c, const double* z, int64_t s) {
+  int64_t ids[4];
+  shear_cell(c, s, ids);
+  return cell_at(ids, z);
 }
 
 }  // namespace drape

@@ -111,7 +111,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   // bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
   auto edge = [&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1, q = c_.next[s & 1][p];
+    const int64_t p = s >> 1, q = nb_e_[pos];
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (fill) edge_kept(s, z + 3 * p, z + 3 * q, ke);
@@ -130,9 +130,8 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], w * (tension * dg[k] + stiff * vg[k]));
   };
   auto triple = [&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1;
-    const int d = int(s & 1);
-    const int64_t ids[3] = {c_.prev[d][p], p, c_.next[d][p]};
+    int64_t ids[3];
+    triple_ids(s, pos, ids);
     double mine[kKgTriple];
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (fill) {
@@ -156,7 +155,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       kg[0] = c_.shear_area[s] * k_slope_[L.shear() - fo + s];
       for (int k = 0; k < 4; ++k) put(kg + 1 + 3 * k, g[k]);
     }
-    shear_cell(c_, s, ids);
+    cell_ids(s, pos, ids);
     const V g[4] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7), load3<double>(kg + 10)};
     const double stiff = kg[0] * along(g, ids, 4, v);
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], stiff * g[k]);
@@ -220,7 +219,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
     V g[2];
-    const double len = edge_length(at(z, p), at(z, c_.next[d][p]), g);
+    const double len = edge_length(at(z, p), at(z, nb_e_[pos]), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
     const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len / L0 - 1);
     k_tension_[s] = std::max(0.0, st.f);
@@ -229,18 +228,21 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
       buf_e_[kEdgeSlot * pos + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
   };
   auto triple = [&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1;
     const int d = int(s & 1);
+    int64_t ids[3];
+    triple_ids(s, pos, ids);
     V g[3];
-    const double th = bend_angle(at(z, c_.prev[d][p]), at(z, p), at(z, c_.next[d][p]),
-                                 load3<double>(&c_.bend_axis[3 * s]), g);
+    const double th =
+        bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
     const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / Lm).df_dq;
     k_slope_[L.moment() - fo + s] = slope;
     for (int k = 0; k < 3; ++k) buf_t_[kTripleSlot * pos + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
   };
   auto shear = [&](int64_t s, int64_t pos) {
-    const CellAt a = cell_at(c_, z, s);
+    int64_t ids[4];
+    cell_ids(s, pos, ids);
+    const CellAt a = cell_at(ids, z);
     V g[4];
     const double phi = shear_cell(a.x, g);
     const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
