@@ -210,6 +210,10 @@ class Evaluator {
     ids[1] = s >> 1;
     ids[2] = nb_t_[2 * pos + 1];
   }
+  // The strains the bands read (stiffness.cpp), of the element at pos.
+  double edge_strain_at(const double* x, int64_t s, int64_t pos) const;
+  double triple_curvature_at(const double* x, int64_t s, int64_t pos) const;
+  double shear_strain_at(const double* x, int64_t s, int64_t pos) const;
   void cell_ids(int64_t s, int64_t pos, int64_t ids[4]) const {
     ids[0] = s;
     for (int k = 0; k < 3; ++k) ids[k + 1] = nb_s_[3 * pos + k];

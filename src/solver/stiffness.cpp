@@ -29,59 +29,75 @@ inline double along(const V* g, const int64_t* ids, int n, const double* v) {
 inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 
 // Each element's generalized strain at positions x, as its band reads it:
-// edge strain, triple curvature about the frozen axis, shear angle.
-inline double edge_strain(const Cloth& c, const double* x, int64_t s) {
-  const int64_t p = s >> 1;
+// edge strain (q: the far end), triple curvature about the frozen axis (ids:
+// previous, centre, next), shear angle (ids: the cell's corners).
+inline double edge_strain(const Cloth& c, const double* x, int64_t s, int64_t q) {
   V g[2];
-  return edge_length(at(x, p), at(x, c.next[s & 1][p]), g) / c.edge_rest[s] - 1;
+  return edge_length(at(x, s >> 1), at(x, q), g) / c.edge_rest[s] - 1;
 }
-inline double triple_curvature(const Cloth& c, const double* x, int64_t s) {
-  const int64_t p = s >> 1;
-  const int d = int(s & 1);
+inline double triple_curvature(const Cloth& c, const double* x, int64_t s, const int64_t ids[3]) {
   V g[3];
-  return bend_angle(at(x, c.prev[d][p]), at(x, p), at(x, c.next[d][p]), load3<double>(&c.bend_axis[3 * s]), g) /
+  return bend_angle(at(x, ids[0]), at(x, ids[1]), at(x, ids[2]), load3<double>(&c.bend_axis[3 * s]), g) /
          c.triple_rest[s];
 }
-inline double shear_strain(const Cloth& c, const double* x, int64_t s) {
-  const CellAt a = cell_at(c, x, s);
+inline double shear_strain(const double* x, const int64_t ids[4]) {
+  const CellAt a = cell_at(ids, x);
   V g[4];
   return shear_cell(a.x, g);
 }
 }  // namespace
 
+double Evaluator::edge_strain_at(const double* x, int64_t s, int64_t pos) const {
+  return edge_strain(c_, x, s, nb_e_[pos]);
+}
+double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos) const {
+  int64_t ids[3];
+  triple_ids(s, pos, ids);
+  return triple_curvature(c_, x, s, ids);
+}
+double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos) const {
+  int64_t ids[4];
+  cell_ids(s, pos, ids);
+  return shear_strain(x, ids);
+}
+
 void Evaluator::hysteresis_forces(double* z) {
+  list_rows();
   halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
   interpolate_hanging(z);
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();  // anchors are indexed from the tension block
   element_passes(
-      [&](int64_t s) { z[L.tension() + s] = m_.stretch[s & 1].stop(c_.anchor[s], edge_strain(c_, z, s)).f; },
-      [&](int64_t s) {
-        z[L.moment() + s] = m_.bend[s & 1].stop(c_.anchor[L.moment() - fo + s], triple_curvature(c_, z, s)).f;
+      [&](int64_t s, int64_t pos) {
+        z[L.tension() + s] = m_.stretch[s & 1].stop(c_.anchor[s], edge_strain_at(z, s, pos)).f;
       },
-      [&](int64_t s) {
-        z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], shear_strain(c_, z, s)).f;
+      [&](int64_t s, int64_t pos) {
+        z[L.moment() + s] = m_.bend[s & 1].stop(c_.anchor[L.moment() - fo + s], triple_curvature_at(z, s, pos)).f;
+      },
+      [&](int64_t s, int64_t pos) {
+        z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], shear_strain_at(z, s, pos)).f;
       });
 }
 
 void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a) {
   // Each element's step-start force f1 (z's force slots) folded into its
   // anchor; only the active elements and the ring's, the ones that read it.
+  list_rows();
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
-  for_edges([&](int64_t s) {
+  for_edges([&](int64_t s, int64_t pos) {
     const Band& b = m_.stretch[s & 1];
-    a[s] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain(c_, x1, s)) : z[fo + s];
+    a[s] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain_at(x1, s, pos)) : z[fo + s];
   });
-  for_triples([&](int64_t s) {
+  for_triples([&](int64_t s, int64_t pos) {
     const Band& b = m_.bend[s & 1];
     const int64_t k = L.moment() - fo + s;
-    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature(c_, x1, s)) : z[fo + k];
+    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature_at(x1, s, pos)) : z[fo + k];
   });
-  for_shears([&](int64_t s) {
+  for_shears([&](int64_t s, int64_t pos) {
     const Band& b = m_.shear;
     const int64_t k = L.shear() - fo + s;
-    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain(c_, x1, s)) : z[fo + k];
+    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain_at(x1, s, pos)) : z[fo + k];
   });
 }
 
