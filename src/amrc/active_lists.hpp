@@ -23,7 +23,7 @@ class Quadtree;
 // costs per item differ. What cuts cannot foresee (another process taking a
 // core for a moment) the tail absorbs: the list's last 1/16, in small pieces
 // that threads take as they finish their chunks. Which thread does an item
-// never changes a result (kernels write per slot).
+// never changes a result (kernels write per element).
 struct ListCuts {
   std::vector<int64_t> cut;     // threads + 1 bounds into the list's head [0, cut.back())
   std::vector<int64_t> next;    // scratch for rebalance()
@@ -78,10 +78,13 @@ struct ActiveLists {
   ActiveList ring_edges, ring_triples, ring_shears;
   // AMRC's hanging particles, finest sides first (an end may itself hang on
   // a coarser side): positions follow their ends; forces and gradients on
-  // them pass to their ends. Empty without AMRC.
+  // them pass to their ends. Empty without AMRC. Filled right after
+  // build_active_lists (hanging_links), never changed on its own: the
+  // evaluator's rows for it follow the stamp below (and its size).
   std::vector<HangingLink> hanging;
   // A number no other build of any lists had: whoever keeps data in list
-  // order (the stiffness product's buffers) sees that the lists changed.
+  // order (the evaluator's buffers, rows and neighbour copies) sees that the
+  // lists changed.
   uint64_t stamp = 0;
 };
 

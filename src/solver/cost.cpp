@@ -25,6 +25,7 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
                      const Halo& halo)
     : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer), halo_(halo) {
   const int64_t n = cloth.grid.n();
+  if (n > kMaxParticles) throw std::length_error("Evaluator: more particles than GatherRow's offsets reach");
   buf_e_.assign(2 * n * 6, 0.0);
   buf_t_.assign(2 * n * 9, 0.0);
   buf_s_.assign(n * kShearSlot, 0.0);
@@ -409,7 +410,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
   // band stiffness (lambda * slope * dq/dx)^2, written to the first entry of
-  // the particle's buffer slot; the element force's own diagonal directly.
+  // the particle's buffer entry; the element force's own diagonal directly.
   // A band only stiffens its element where the force lies outside it (the
   // exact Gauss-Newton diagonal); inside, the force is free at no cost.
   const double mu = m_.memory;
@@ -532,6 +533,12 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   zwork_.assign(z, z + nz);
   std::fill(grad, grad + nz, 0.0);
   const Grid& gr = c_.grid;
+  // window_cost reaches elements by slot: each active one needs a list
+  // position, which holds where one rank owns every tile (this mode's case).
+  for (int64_t s = 0; s < 2 * gr.n(); ++s)
+    if ((c_.edge_on[s] && at_e_[s] < 0) || (c_.triple_on[s] && at_t_[s] < 0) ||
+        (s < gr.n() && c_.shear_on[s] && at_s_[s] < 0))
+      throw std::logic_error("numeric gradient: an active element in no list (it needs every tile on one rank)");
   const double hmin = std::min(gr.hi, gr.hj), F0 = m_.force_scale;
   auto diff = [&](int64_t u, int64_t p, double scale) {
     const double h = 1e-6 * (std::fabs(z[u]) + scale);

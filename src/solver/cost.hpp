@@ -120,7 +120,7 @@ class Evaluator {
   // The three element passes (this rank's and the ring's) in one parallel
   // region, and, with a particle pass, after a barrier, `between` on one
   // thread (serial work such as the hanging particles') and the particle
-  // pass that gathers the elements' per-slot results: one fork and join
+  // pass that gathers the elements' results: one fork and join
   // instead of up to seven (on a coarse mesh a pass is microseconds of work).
   // `between` may run on any thread of the team: it must not call MPI (the
   // library runs FUNNELED), throw, or contain OpenMP work-sharing.
@@ -180,7 +180,7 @@ class Evaluator {
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
   std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
                                                   // the tension block) and edge tensions
-  // stiffness_product's z-only numbers, per slot or particle, kept from the
+  // stiffness_product's z-only numbers, per list position or particle, kept from the
   // first product at the linear solve's z (keep_products; kg_ready_ until
   // stiffness_diagonal's next z): edges (edge_kept), triples and cells
   // (slope factor, then the gradient, 3 or 4 x 3), contact (force, size, slope).

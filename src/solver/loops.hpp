@@ -3,7 +3,7 @@
 // (active lists) splits the list into chunks, one per thread: equal at
 // first, then cut where the measured times balance (ListCuts); the
 // alternatives hand out whole tiles with OpenMP's static, dynamic or guided
-// schedule (paper Fig. 8). Kernels write per-slot results only, so every
+// schedule (paper Fig. 8). Kernels write per-element results only, so every
 // schedule gives bitwise the same numbers.
 #include <omp.h>
 

@@ -164,14 +164,14 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     double mine[kKgCell];
     double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
     int64_t ids[4];
+    cell_ids(s, pos, ids);
     if (fill) {
-      const CellAt a = cell_at(c_, z, s);
+      const CellAt a = cell_at(ids, z);
       V g[4];
       shear_cell<double, false>(a.x, g);
       kg[0] = c_.shear_area[s] * k_slope_[L.shear() - fo + s];
       for (int k = 0; k < 4; ++k) put(kg + 1 + 3 * k, g[k]);
     }
-    cell_ids(s, pos, ids);
     const V g[4] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7), load3<double>(kg + 10)};
     const double stiff = kg[0] * along(g, ids, 4, v);
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], stiff * g[k]);
@@ -230,7 +230,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   // Per element and particle: the diagonal of its stiffness block, in the
-  // first entry of the particle's buffer slot, gathered below.
+  // first entry of the particle's buffer entry, gathered below.
   auto edge = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
