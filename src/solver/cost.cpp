@@ -87,26 +87,23 @@ void Evaluator::list_rows() {
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
   kg_ready_ = false;  // kept in the old lists' order
-  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at) {
+  // Each element's position (the ring's after the owned) and neighbours.
+  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at, auto&& ends) {
     std::fill(at.begin(), at.end(), -1);
-    for (int64_t k = 0; k < own.size(); ++k) at[own.items[k]] = int32_t(k);
-    for (int64_t k = 0; k < ring.size(); ++k) at[ring.items[k]] = int32_t(own.size() + k);
-  };
-  place(lists_.edges, lists_.ring_edges, at_e_);
-  place(lists_.triples, lists_.ring_triples, at_t_);
-  place(lists_.shears, lists_.ring_shears, at_s_);
-  // Each element's neighbours, at its position (the ring's after the owned).
-  auto ends = [](const ActiveList& own, const ActiveList& ring, auto&& put) {
+    auto put = [&](int64_t s, int64_t pos) {
+      at[s] = int32_t(pos);
+      ends(s, pos);
+    };
     for (int64_t k = 0; k < own.size(); ++k) put(own.items[k], k);
     for (int64_t k = 0; k < ring.size(); ++k) put(ring.items[k], own.size() + k);
   };
-  ends(lists_.edges, lists_.ring_edges,
-       [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
-  ends(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
+  place(lists_.edges, lists_.ring_edges, at_e_,
+        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
+  place(lists_.triples, lists_.ring_triples, at_t_, [&](int64_t s, int64_t pos) {
     nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
     nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
   });
-  ends(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
+  place(lists_.shears, lists_.ring_shears, at_s_, [&](int64_t s, int64_t pos) {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
   });
   const ActiveList& pl = lists_.particles;

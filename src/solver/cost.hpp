@@ -210,14 +210,14 @@ class Evaluator {
     ids[1] = s >> 1;
     ids[2] = nb_t_[2 * pos + 1];
   }
-  // The strains the bands read (stiffness.cpp), of the element at pos.
-  double edge_strain_at(const double* x, int64_t s, int64_t pos) const;
-  double triple_curvature_at(const double* x, int64_t s, int64_t pos) const;
-  double shear_strain_at(const double* x, int64_t s, int64_t pos) const;
   void cell_ids(int64_t s, int64_t pos, int64_t ids[4]) const {
     ids[0] = s;
     for (int k = 0; k < 3; ++k) ids[k + 1] = nb_s_[3 * pos + k];
   }
+  // The strains the bands read (stiffness.cpp), of the element at pos.
+  double edge_strain_at(const double* x, int64_t s, int64_t pos) const;
+  double triple_curvature_at(const double* x, int64_t s, int64_t pos) const;
+  double shear_strain_at(const double* x, int64_t s, int64_t pos) const;
   uint64_t rows_stamp_ = 0;
   size_t rows_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
