@@ -6,6 +6,7 @@ segments, on different machines or thread counts, gets its time from the
 ledger: see campaign_time."""
 import collections
 import json
+import os
 import sys
 import tomllib
 
@@ -38,6 +39,12 @@ def on_grid(x, n):
     return cols
 
 
+def ledger_row(run):
+    """The campaign row a run folder belongs to: its real name up to the segment
+    number (257-amrc-lo.3 and a link 257-amrc to it: 257-amrc-lo)."""
+    return os.path.basename(os.path.realpath(run)).split(".")[0]
+
+
 def ledger_segments(path):
     """A campaign ledger's segments per row, in order (lines without a report skipped)."""
     rows = collections.defaultdict(list)
@@ -58,14 +65,16 @@ def ledger_segments(path):
                     "iterations": int(v["iterations"]), "mean": float(v["particles_mean"]),
                     "min": int(v["particles_min"]) if v.get("particles_min", "NA") != "NA" else None,
                     "max": int(v["particles_max"]) if v.get("particles_max", "NA") != "NA" else None,
-                    "machine": (v["host"], int(v["threads"]) if v.get("threads") else 1)})
+                    # segments of different code are timed apart (binary NA: before the ledger had it)
+                    "machine": (v["host"], int(v["threads"]) if v.get("threads") else 1,
+                                v.get("binary") or "NA")})
             except (KeyError, ValueError) as e:
                 sys.exit(f"table1.py: {path}:{n}: unreadable ledger line ({e})")
     return rows
 
 
 def campaign_time(segments, machine):
-    """A row's time on one machine (host, threads), from its segments. Each
+    """A row's time on one machine (host, threads, binary), from its segments. Each
     segment did mean * iterations - (the same before it) particle-iterations
     (the ledger's counts are cumulative). The segments that ran on `machine`
     give the row's seconds per particle-iteration there; the others' work is
@@ -92,7 +101,7 @@ def campaign_time(segments, machine):
 
 
 def reference_machine(segments):
-    """The (host, threads) on which the row spent the most wall time."""
+    """The (host, threads, binary) on which the row spent the most wall time."""
     spent = collections.Counter()
     for seg in segments:
         spent[seg["machine"]] += seg["wall"]
@@ -124,7 +133,7 @@ def main():
             rms = float(np.sqrt(np.mean(np.sum((x - ref_x) ** 2, axis=2)))) / width
             pa = r["particles_active"]
             rows.append({
-                "size": fine, "mesh": name, "grid": r["grid"], "wall_seconds": r["wall_seconds"],
+                "size": fine, "mesh": name, "ledger_row": ledger_row(path), "grid": r["grid"], "wall_seconds": r["wall_seconds"],
                 "particles_min": pa["min"], "particles_max": pa["max"],
                 # active particles per CG iteration (reports before it existed: the final count)
                 "particles_mean": pa.get("mean", pa["final"]), "iterations": r["iterations"],
@@ -166,12 +175,12 @@ def main():
 def apply_ledger(rows, ledger):
     """Times from the campaign's ledger, on the machine the AMRC row ran on."""
     for size in sorted({r["size"] for r in rows}):
-        amrc = ledger.get(f"{size}-amrc")
+        amrc = ledger.get(next(r["ledger_row"] for r in rows if r["size"] == size and r["mesh"] == "AMRC"))
         if not amrc:
             continue
         machine = reference_machine(amrc)
         for r in rows:
-            segs = ledger.get("%d-%s" % (r["grid"][0], {"AMRC": "amrc"}.get(r["mesh"], r["mesh"])))
+            segs = ledger.get(r["ledger_row"])
             t = campaign_time(segs, machine) if r["size"] == size and segs else None
             if t is None:
                 continue
@@ -180,7 +189,7 @@ def apply_ledger(rows, ledger):
             hi = [g["max"] for g in segs if g["max"] is not None]
             if lo and hi:  # a segment's report counts its own steps only
                 r["particles_min"], r["particles_max"] = min(lo), max(hi)
-            r["machine"] = "%s, %d thread(s)" % machine
+            r["machine"] = "%s, %d thread(s), binary %s" % machine
     for r in rows:
         if "machine" in r:
             print("%d %s: %.0f s on %s over %d segment(s), %.0f%% of its work timed there%s"

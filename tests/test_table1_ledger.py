@@ -1,6 +1,8 @@
 """run/table1.py --ledger: a Table 1 row run in segments, on two machines,
 gets its time on the AMRC row's machine (the segments timed there give the
-rate per particle-iteration; the others' work is counted at that rate)."""
+rate per particle-iteration; the others' work is counted at that rate). A
+machine is (host, threads, binary): segments of other code are counted at
+the rate, not timed."""
 import os
 import sys
 import tempfile
@@ -10,12 +12,12 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import table1  # noqa: E402
 
 HEAD = ("row\tsegment\twall_seconds\tsteps\tsimulated_seconds\tat_rest\tparticles_mean\titerations\t"
-        "date\thost\tstarted\tthreads\tcpu_seconds\tparticles_min\tparticles_max\n")
+        "date\thost\tstarted\tthreads\tcpu_seconds\tparticles_min\tparticles_max\tbinary\n")
 
 
-def line(row, seg, wall, mean, its, host, threads, cpu="NA", lo="NA", hi="NA"):
+def line(row, seg, wall, mean, its, host, threads, cpu="NA", lo="NA", hi="NA", binary="b1"):
     return "\t".join(str(v) for v in (row, seg, wall, 1, 0.1, False, mean, its, "d", host, 0, threads,
-                                      cpu, lo, hi)) + "\n"
+                                      cpu, lo, hi, binary)) + "\n"
 
 
 # finest: 1e5 particle-iterations on a 16-thread machine, then 5e4 here in
@@ -46,26 +48,52 @@ class Ledger(unittest.TestCase):
 
     def test_time_on_the_reference_machine(self):
         segs = table1.ledger_segments(self.path)
-        self.assertEqual(table1.reference_machine(segs["9-amrc"]), ("vm", 1))
-        f = table1.campaign_time(segs["9-finest"], ("vm", 1))
+        self.assertEqual(table1.reference_machine(segs["9-amrc"]), ("vm", 1, "b1"))
+        f = table1.campaign_time(segs["9-finest"], ("vm", 1, "b1"))
         self.assertAlmostEqual(f["wall_seconds"], 150.0)
         self.assertAlmostEqual(f["cpu_seconds"], 135.0)
         self.assertAlmostEqual(f["particle_iterations"], 1.5e5)
         self.assertAlmostEqual(f["measured_share"], 1 / 3)
-        a = table1.campaign_time(segs["9-amrc"], ("vm", 1))
+        a = table1.campaign_time(segs["9-amrc"], ("vm", 1, "b1"))
         self.assertAlmostEqual(a["wall_seconds"], 40.0)  # all here: the plain sum
         self.assertIsNone(a["cpu_seconds"])  # the first segment's report had none
         self.assertAlmostEqual(a["particle_iterations"], 2.7e4)
-        self.assertIsNone(table1.campaign_time(segs["9-amrc"], ("elsewhere", 4)))
+        self.assertIsNone(table1.campaign_time(segs["9-amrc"], ("elsewhere", 4, "b1")))
 
     def test_rows_take_the_ledger_time_and_particle_range(self):
         rows = [{"size": 9, "mesh": m, "grid": [n, n], "wall_seconds": 1.0, "particles_min": 0,
-                 "particles_max": 0} for m, n in (("finest", 9), ("AMRC", 9), ("coarsest", 3))]
+                 "particles_max": 0, "ledger_row": "%d-%s" % (n, m.lower())}
+                for m, n in (("finest", 9), ("AMRC", 9), ("coarsest", 3))]
         table1.apply_ledger(rows, table1.ledger_segments(self.path))
         self.assertAlmostEqual(rows[0]["wall_seconds"], 150.0)
         self.assertEqual((rows[1]["particles_min"], rows[1]["particles_max"]), (8, 100))
         self.assertAlmostEqual(rows[1]["wall_seconds"], 40.0)
         self.assertEqual(rows[2]["wall_seconds"], 1.0)  # not in the ledger: its own report's
+
+    def test_other_code_is_counted_at_the_rate_not_timed(self):
+        # 9-amrc-lo reruns the AMRC row with new code (b2), and the finest row
+        # gets a segment of b2 too: 2e4 particle-iterations in 10 s, so its
+        # 1.7e5 in all take 85 s; its b1 segments count only as work.
+        with open(self.path, "a") as f:
+            f.write(line("9-amrc-lo", "9-amrc-lo", 12, 18, 1500, "vm", 1, cpu=11, binary="b2")
+                    + line("9-finest", "9-finest.3", 10, 100, 1700, "vm", 1, cpu=9, binary="b2"))
+        segs = table1.ledger_segments(self.path)
+        self.assertEqual(table1.reference_machine(segs["9-amrc-lo"]), ("vm", 1, "b2"))
+        rows = [{"size": 9, "mesh": m, "grid": [9, 9], "wall_seconds": 1.0, "particles_min": 0,
+                 "particles_max": 0, "ledger_row": name}
+                for m, name in (("finest", "9-finest"), ("AMRC", "9-amrc-lo"))]
+        table1.apply_ledger(rows, segs)
+        self.assertAlmostEqual(rows[0]["wall_seconds"], 85.0)
+        self.assertAlmostEqual(rows[0]["measured_share"], 2e4 / 1.7e5)
+        self.assertAlmostEqual(rows[1]["wall_seconds"], 12.0)
+        self.assertIn("binary b2", rows[0]["machine"])
+
+    def test_a_run_folder_names_its_ledger_row(self):
+        seg = os.path.join(self.dir.name, "257-amrc-lo.3")
+        os.mkdir(seg)
+        os.symlink(seg, os.path.join(self.dir.name, "257-amrc"))
+        self.assertEqual(table1.ledger_row(os.path.join(self.dir.name, "257-amrc")), "257-amrc-lo")
+        self.assertEqual(table1.ledger_row(os.path.join(self.dir.name, "129-finest")), "129-finest")
 
     def test_a_bad_line_names_the_file_and_line(self):
         with open(self.path, "a") as f:
