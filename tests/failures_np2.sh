@@ -3,6 +3,8 @@
 # a non-zero status and leaves a checkpoint that restarts; a numerical failure
 # (NaN injected on purpose) ends with exit 3 naming the step, and the last
 # good checkpoint stays intact and restartable. No temporary file is left.
+# An internal error on one rank alone (injected) ends both ranks at once,
+# named by its rank, with the last checkpoint intact.
 # Usage: failures_np2.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
@@ -49,3 +51,29 @@ grep -q "drape: error: numerical failure at step 12, iteration" "$work/nan.out" 
 no_tmp "$work/nan"
 OMP_NUM_THREADS=1 "$drape" --restart "$work/nan/checkpoint.h5" --set solver.steps=14 --output "$work/nan-continued" --quiet
 echo "ok NaN at step 12: exit 3, checkpoint of step 10 intact and restartable"
+
+# An internal error on rank 1 alone before step 12: rank 0 waits for it in the
+# step's halo exchange, so only an abort ends the run.
+status=0
+DRAPE_FAULT_NAN_STEP=12 DRAPE_FAULT_INTERNAL_RANK=1 OMP_NUM_THREADS=1 timeout 60 "$mpiexec" -n 2 "$drape" \
+  "${scene[@]}" --set solver.steps=40 --set output.checkpoint_every=5 --output "$work/internal" \
+  > "$work/internal.out" 2>&1 || status=$?
+cat "$work/internal.out"
+[[ $status != 124 ]] || { echo "FAIL: rank 0 still waiting 60 s after rank 1's internal error"; exit 1; }
+[[ $status != 0 ]] || { echo "FAIL: exit status 0 after an internal error"; exit 1; }
+grep -q "drape: error: rank 1 of 2: internal: fault injected" "$work/internal.out" ||
+  { echo "FAIL: the message does not name rank 1"; exit 1; }
+"$drape" --restart "$work/internal/checkpoint.h5" --dry-run | grep -q "at step 10$" ||
+  { echo "FAIL: the last good checkpoint (step 10) is not intact"; exit 1; }
+echo "ok internal error on rank 1: status $status, named, checkpoint of step 10 intact"
+
+# On one rank the same error unwinds: exit 1, one message, no temporary file.
+status=0
+DRAPE_FAULT_NAN_STEP=12 DRAPE_FAULT_INTERNAL_RANK=0 OMP_NUM_THREADS=1 "$drape" "${scene[@]}" \
+  --set solver.steps=40 --set output.checkpoint_every=5 --output "$work/internal1" > "$work/internal1.out" 2>&1 ||
+  status=$?
+[[ $status == 1 ]] || { echo "FAIL: one rank: exit status $status, expected 1"; exit 1; }
+grep -qx "drape: error: internal: fault injected on purpose (DRAPE_FAULT_INTERNAL_RANK)" "$work/internal1.out" ||
+  { cat "$work/internal1.out"; echo "FAIL: one rank: not the internal error's message"; exit 1; }
+no_tmp "$work/internal1"
+echo "ok internal error on one rank: exit 1, no temporary file"

@@ -1,6 +1,7 @@
 // drape: the program's start. Parses flags, loads and validates the scene and
 // fabric, then hands over to run_simulation(). Exit status: 0 success, 2 bad
-// input, 3 numerical failure, 1 internal error. Only rank 0 prints.
+// input, 3 numerical failure, 1 internal error. Only rank 0 prints, except
+// that an internal error is named by the rank it struck.
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
@@ -25,6 +26,13 @@ int fail(int code, const std::string& what) {
   if (drape::rank_of(MPI_COMM_WORLD) == 0) std::cerr << "drape: error: " << what << "\n";
   MPI_Finalize();
   return code;
+}
+
+// An internal error may strike one rank alone while the others wait for it
+// in a collective: that rank names itself and ends them all.
+int fail_internal(const std::string& what) {
+  if (drape::size_of(MPI_COMM_WORLD) == 1) return fail(1, "internal: " + what);
+  drape::end_all_ranks(MPI_COMM_WORLD, what);
 }
 
 }  // namespace
@@ -113,6 +121,6 @@ int main(int argc, char** argv) {
   } catch (const drape::NumericalError& e) {
     return fail(3, e.what());
   } catch (const std::exception& e) {
-    return fail(1, std::string("internal: ") + e.what());
+    return fail_internal(e.what());
   }
 }

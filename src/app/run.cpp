@@ -14,6 +14,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 #include "amrc/active_lists.hpp"
 #include "amrc/amrc.hpp"
@@ -85,6 +86,14 @@ void write_text_atomically(const std::string& path, const std::string& text) {
 int fault_step() {
   const char* v = std::getenv("DRAPE_FAULT_NAN_STEP");
   return v ? std::atoi(v) : 0;
+}
+
+// Test hook: DRAPE_FAULT_INTERNAL_RANK=r makes rank r alone throw an internal
+// error before the step DRAPE_FAULT_NAN_STEP names, the way a bug on one
+// rank would, so that the others are seen not to wait for it.
+int fault_internal_rank() {
+  const char* v = std::getenv("DRAPE_FAULT_INTERNAL_RANK");
+  return v ? std::atoi(v) : -1;
 }
 
 void inject_nan(Cloth& c, const ActiveLists& lists) {
@@ -266,6 +275,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   };
   const int every = scene.output.every, ck_every = scene.output.checkpoint_every;
   const int poison = fault_step();
+  const bool poison_throws = fault_internal_rank() >= 0;
   int last_checkpoint = opt.restart ? cloth.step : -1;
   // AMRC between steps (the paper checks every few CG iterations; between
   // steps the minimiser never sees the mesh change under it).
@@ -346,36 +356,50 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                              model.gravity[2] * model.gravity[2]);
   const LoopClock clock0 = loop_clock();
   const auto stepping0 = std::chrono::steady_clock::now();
-  while (cloth.step < scene.solver.steps) {
-    if (poison == cloth.step + 1) inject_nan(cloth, lists);
-    const StepStats st = loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
-    if (st.stopped) break;
-    add_step(sum.counters, st, sum.active_final);
-    sum.last = st;
-    const bool easing = cloth.time < ease_until;
-    if (easing) relax_eased_edges(cloth, lists.edges, lists.ring_edges, kEaseRate, st.dt);
-    progress.step(st, amrc ? sum.active_final : -1);
-    const bool reached = scene.solver.end_time > 0 && cloth.time >= scene.solver.end_time;
-    const bool last = st.step == scene.solver.steps || reached;
-    sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed && !easing)
-                            ? sum.counters.calm + 1 : 0;
-    // Three calm steps, spanning at least the time a cloth let go from rest
-    // takes to pass rest_speed twice over: the top of a fall is not rest.
-    const double calm_span = g > 0 ? 2 * scene.solver.rest_speed / (g * st.dt) : 0;
-    sum.at_rest = sum.counters.calm >= std::max(3.0, std::ceil(calm_span));
-    if (sum.at_rest && sequence_level > 0 && !last && finer_mesh_fits()) {
-      refine_everywhere();
-      sum.counters.calm = 0;
-      sum.at_rest = false;
+  // The steps are where one rank can fail alone (the collective failures,
+  // bad input and a numerical failure, are raised on every rank together).
+  try {
+    while (cloth.step < scene.solver.steps) {
+      if (poison == cloth.step + 1 && !poison_throws) inject_nan(cloth, lists);
+      if (poison == cloth.step + 1 && fault_internal_rank() == rank)
+        throw std::logic_error("fault injected on purpose (DRAPE_FAULT_INTERNAL_RANK)");
+      const StepStats st =
+          loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
+      if (st.stopped) break;
+      add_step(sum.counters, st, sum.active_final);
+      sum.last = st;
+      const bool easing = cloth.time < ease_until;
+      if (easing) relax_eased_edges(cloth, lists.edges, lists.ring_edges, kEaseRate, st.dt);
+      progress.step(st, amrc ? sum.active_final : -1);
+      const bool reached = scene.solver.end_time > 0 && cloth.time >= scene.solver.end_time;
+      const bool last = st.step == scene.solver.steps || reached;
+      sum.counters.calm = (scene.solver.rest_speed > 0 && st.max_speed < scene.solver.rest_speed && !easing)
+                              ? sum.counters.calm + 1 : 0;
+      // Three calm steps, spanning at least the time a cloth let go from rest
+      // takes to pass rest_speed twice over: the top of a fall is not rest.
+      const double calm_span = g > 0 ? 2 * scene.solver.rest_speed / (g * st.dt) : 0;
+      sum.at_rest = sum.counters.calm >= std::max(3.0, std::ceil(calm_span));
+      if (sum.at_rest && sequence_level > 0 && !last && finer_mesh_fits()) {
+        refine_everywhere();
+        sum.counters.calm = 0;
+        sum.at_rest = false;
+      }
+      if (!last && !sum.at_rest && every > 0 && st.step % every == 0) {
+        ScopedPhase ph(tm, kOutput);
+        write_frame();
+        last_frame = st.step;
+      }
+      if (scene.amrc.enabled && st.step % scene.amrc.every == 0) adapt_mesh();
+      if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
+      if (sum.at_rest || reached || stop_now()) break;
     }
-    if (!last && !sum.at_rest && every > 0 && st.step % every == 0) {
-      ScopedPhase ph(tm, kOutput);
-      write_frame();
-      last_frame = st.step;
-    }
-    if (scene.amrc.enabled && st.step % scene.amrc.every == 0) adapt_mesh();
-    if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
-    if (sum.at_rest || reached || stop_now()) break;
+  } catch (const InputError&) {
+    throw;
+  } catch (const NumericalError&) {
+    throw;
+  } catch (const std::exception& e) {
+    if (ranks == 1) throw;
+    end_all_ranks(comm, e.what());
   }
   sum.signal = stop_code / 2;
   sum.final_level = sequence_level;

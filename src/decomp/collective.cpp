@@ -1,6 +1,8 @@
 #include "decomp/collective.hpp"
 
 #include <algorithm>
+#include <cstdlib>
+#include <iostream>
 
 namespace drape {
 
@@ -48,5 +50,12 @@ std::string root_error(MPI_Comm comm, const std::string& error) {
 }
 
 void wait_for_all(MPI_Comm comm) { MPI_Barrier(comm); }
+
+void end_all_ranks(MPI_Comm comm, const std::string& what) {
+  std::cerr << "drape: error: rank " << rank_of(comm) << " of " << size_of(comm) << ": internal: " << what
+            << std::endl;
+  MPI_Abort(comm, 1);
+  std::abort();  // MPI_Abort does not return; this tells the compiler so
+}
 
 }  // namespace drape

@@ -25,5 +25,10 @@ uint64_t sum_over_ranks(MPI_Comm comm, uint64_t value);
 std::string root_error(MPI_Comm comm, const std::string& error);
 // Every rank has arrived.
 void wait_for_all(MPI_Comm comm);
+// Ends every rank at once, this one naming itself and `what` on stderr: for
+// an error that struck this rank alone (a bug, memory), since the others may
+// wait for it in a collective, and unwinding would wait in one too (a
+// parallel HDF5 file's close).
+[[noreturn]] void end_all_ranks(MPI_Comm comm, const std::string& what);
 
 }  // namespace drape
