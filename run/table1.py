@@ -1,5 +1,7 @@
 """Table 1 from run/table1's runs: reads each run's report.json and the final
-frame of its drape.h5, prints the table and writes table1.json.
+frame of its drape.h5, prints the table and writes table1.json, and
+table1-SIZE.png: where AMRC's and the coarsest mesh's drapes lie off the
+finest one's, beside AMRC's final leaf levels.
 Usage: table1.py DIR PAIR... [--ledger LEDGER.tsv]
 With --ledger (a campaign's, bench/table1-257/ledger.tsv), a row that ran in
 segments, on different machines or thread counts, gets its time from the
@@ -37,6 +39,45 @@ def on_grid(x, n):
     rows = (1 - t)[:, None, None] * x[i0] + t[:, None, None] * x[i0 + 1]
     cols = (1 - t)[None, :, None] * rows[:, i0] + t[None, :, None] * rows[:, i0 + 1]
     return cols
+
+
+def final_field(run, name):
+    with h5py.File(f"{run}/drape.h5", "r") as f:
+        last = sorted(f["frames"].keys())[-1]
+        return np.array(f["frames"][last][name])
+
+
+def plot_errors(out, fine, runs, ref_x, width):
+    """table1-FINE.png: the distance of each point of AMRC's and the coarsest
+    mesh's drapes from the same point of the finest one's (over the cloth's
+    parameters, per width), beside AMRC's final leaf levels."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return None
+    dist = {name: np.linalg.norm(on_grid(final_positions(path), fine) - ref_x, axis=2) / width
+            for name, path, _ in runs if name != "finest"}
+    top = max(float(d.max()) for d in dist.values()) or 1.0
+    fig, ax = plt.subplots(1, 3, figsize=(13, 4.2), constrained_layout=True)
+    level = final_field(dict((n, p) for n, p, _ in runs)["AMRC"], "level")
+    im = ax[0].imshow(level.T, origin="lower", cmap="viridis", interpolation="nearest")
+    fig.colorbar(im, ax=ax[0], ticks=range(int(level.max()) + 1), label="leaf level (0: finest)")
+    ax[0].set_title("AMRC: leaf levels at rest")
+    for a, name in zip(ax[1:], ("AMRC", "coarsest")):
+        d = dist[name]
+        im = a.imshow(d.T, origin="lower", cmap="magma", vmin=0, vmax=top, interpolation="nearest")
+        a.set_title("%s: distance from the finest drape\n(RMS %.4f of the width)"
+                    % (name, float(np.sqrt(np.mean(d ** 2)))))
+    fig.colorbar(im, ax=list(ax[1:]), label="distance / cloth width")
+    for a in ax:
+        a.set_xlabel("i")
+        a.set_ylabel("j")
+    path = f"{out}/table1-{fine}.png"
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
 
 
 def ledger_row(run):
@@ -127,13 +168,17 @@ def main():
         ref_x = final_positions(runs[0][1])
         ref_cost = reports["finest"]["final_cost"]["total"]
         width = cloth_width(runs[0][1])
+        picture = plot_errors(out, fine, runs, ref_x, width)
+        if picture:
+            print("picture:", picture)
         for name, path, n in runs:
             r = reports[name]
             x = on_grid(final_positions(path), fine)
             rms = float(np.sqrt(np.mean(np.sum((x - ref_x) ** 2, axis=2)))) / width
             pa = r["particles_active"]
             rows.append({
-                "size": fine, "mesh": name, "ledger_row": ledger_row(path), "grid": r["grid"], "wall_seconds": r["wall_seconds"],
+                "size": fine, "mesh": name, "ledger_row": ledger_row(path), "grid": r["grid"],
+                "wall_seconds": r["wall_seconds"],
                 "particles_min": pa["min"], "particles_max": pa["max"],
                 # active particles per CG iteration (reports before it existed: the final count)
                 "particles_mean": pa.get("mean", pa["final"]), "iterations": r["iterations"],

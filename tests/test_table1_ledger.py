@@ -8,6 +8,9 @@ import sys
 import tempfile
 import unittest
 
+import h5py
+import numpy as np
+
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "run"))
 import table1  # noqa: E402
 
@@ -94,6 +97,25 @@ class Ledger(unittest.TestCase):
         os.symlink(seg, os.path.join(self.dir.name, "257-amrc"))
         self.assertEqual(table1.ledger_row(os.path.join(self.dir.name, "257-amrc")), "257-amrc-lo")
         self.assertEqual(table1.ledger_row(os.path.join(self.dir.name, "129-finest")), "129-finest")
+
+    def test_the_error_picture_is_drawn_from_the_final_frames(self):
+        # A 5 x 5 finest drape, AMRC's 1 cm above it, the coarsest's 3 x 3
+        # 2 cm above: the picture's scale is the larger, 0.02 of the 1 m width.
+        def run(name, n, lift, level):
+            os.mkdir(os.path.join(self.dir.name, name))
+            u = np.linspace(0, 1, n)
+            x = np.stack(np.meshgrid(u, u, indexing="ij") + [np.full((n, n), lift)], axis=2)
+            with h5py.File(os.path.join(self.dir.name, name, "drape.h5"), "w") as f:
+                f["frames/000001/positions"] = x
+                f["frames/000001/level"] = np.full((n, n), level, dtype=np.uint8)
+            return (name, os.path.join(self.dir.name, name), n)
+        runs = [run("5-finest", 5, 0.0, 0), run("5-amrc", 5, 0.01, 1), run("3-coarsest", 3, 0.02, 0)]
+        ref = table1.final_positions(runs[0][1])
+        path = table1.plot_errors(self.dir.name, 5, [(m, p, n) for (_, p, n), m in
+                                                     zip(runs, ("finest", "AMRC", "coarsest"))], ref, 1.0)
+        self.assertEqual(path, os.path.join(self.dir.name, "table1-5.png"))
+        with open(path, "rb") as f:
+            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
 
     def test_a_bad_line_names_the_file_and_line(self):
         with open(self.path, "a") as f:
