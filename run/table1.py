@@ -64,7 +64,7 @@ def plot_errors(out, fine, runs, ref_x, width):
     level = final_field(dict((n, p) for n, p, _ in runs)["AMRC"], "level")
     im = ax[0].imshow(level.T, origin="lower", cmap="viridis", interpolation="nearest")
     fig.colorbar(im, ax=ax[0], ticks=range(int(level.max()) + 1), label="leaf level (0: finest)")
-    ax[0].set_title("AMRC: leaf levels at rest")
+    ax[0].set_title("AMRC: final leaf levels")
     for a, name in zip(ax[1:], ("AMRC", "coarsest")):
         d = dist[name]
         im = a.imshow(d.T, origin="lower", cmap="magma", vmin=0, vmax=top, interpolation="nearest")
@@ -159,7 +159,7 @@ def main():
         ledger = ledger_segments(args[k + 1])
         del args[k:k + 2]
     out, pairs = args[0], args[1:]
-    rows = []
+    rows, pictures = [], []
     for pair in pairs:
         fine, coarse = (int(v) for v in pair.split(":"))
         runs = [("finest", f"{out}/{fine}-finest", fine), ("AMRC", f"{out}/{fine}-amrc", fine),
@@ -168,9 +168,7 @@ def main():
         ref_x = final_positions(runs[0][1])
         ref_cost = reports["finest"]["final_cost"]["total"]
         width = cloth_width(runs[0][1])
-        picture = plot_errors(out, fine, runs, ref_x, width)
-        if picture:
-            print("picture:", picture)
+        pictures.append((fine, runs, ref_x, width))
         for name, path, n in runs:
             r = reports[name]
             x = on_grid(final_positions(path), fine)
@@ -198,8 +196,9 @@ def main():
         parts = str(r["particles_min"]) if r["particles_min"] == r["particles_max"] else \
             "%d-%d" % (r["particles_min"], r["particles_max"])
         zz = "-" if r["zigzag_share"] is None else "%.3f" % r["zigzag_share"]
-        print("%-5d %-9s %10s %8.1f %8.3f%s %15s %8.0f %+12.3f %12.4f %12.2g %7s" % (
-            r["size"], r["mesh"], "%dx%d" % tuple(r["grid"]), r["wall_seconds"], r["simulated_seconds"],
+        wall = "-" if r["wall_seconds"] is None else "%.1f" % r["wall_seconds"]
+        print("%-5d %-9s %10s %8s %8.3f%s %15s %8.0f %+12.3f %12.4f %12.2g %7s" % (
+            r["size"], r["mesh"], "%dx%d" % tuple(r["grid"]), wall, r["simulated_seconds"],
             "*" if r["at_rest"] else " ", parts, r["particles_mean"],
             r["quality_error_cost"], r["quality_error_geometric"], r["max_penetration"], zz))
     print("(t: simulated seconds, * at rest; mean: active particles per CG iteration; zigzag: share of\n"
@@ -208,13 +207,23 @@ def main():
         f, a, c = (next(r for r in rows if r["size"] == size and r["mesh"] == m)
                    for m in ("finest", "AMRC", "coarsest"))
         work = lambda r: r["particles_mean"] * r["iterations"]  # what a CG iteration's cost scales with
-        print("%d: AMRC %.2fx faster than the finest mesh (%.2fx less work in particle-iterations); geometric "
+        speed = "not timed" if f["wall_seconds"] is None or a["wall_seconds"] is None else \
+            "%.2fx faster" % (f["wall_seconds"] / a["wall_seconds"])
+        print("%d: AMRC %s than the finest mesh (%.2fx less work in particle-iterations); geometric "
               "error %.4f vs the coarsest's %.4f (%.2f of it)"
-              % (size, f["wall_seconds"] / a["wall_seconds"], work(f) / max(work(a), 1e-300),
+              % (size, speed, work(f) / max(work(a), 1e-300),
                  a["quality_error_geometric"], c["quality_error_geometric"],
                  a["quality_error_geometric"] / max(c["quality_error_geometric"], 1e-300)))
         if f.get("cpu_seconds") and a.get("cpu_seconds"):
             print("%d: in CPU time AMRC is %.2fx faster" % (size, f["cpu_seconds"] / a["cpu_seconds"]))
+    for fine, runs, ref_x, width in pictures:  # last: a picture that fails costs no table
+        try:
+            path = plot_errors(out, fine, runs, ref_x, width)
+        except Exception as e:  # noqa: BLE001 (any plotting failure)
+            print("table1.py: no picture for %d: %s" % (fine, e), file=sys.stderr)
+            continue
+        if path:
+            print("picture:", path)
 
 
 def apply_ledger(rows, ledger):
@@ -226,8 +235,13 @@ def apply_ledger(rows, ledger):
         machine = reference_machine(amrc)
         for r in rows:
             segs = ledger.get(r["ledger_row"])
-            t = campaign_time(segs, machine) if r["size"] == size and segs else None
-            if t is None:
+            if r["size"] != size or not segs:
+                continue  # not in the ledger: its own report's time
+            t = campaign_time(segs, machine)
+            if t is None:  # a rate from other code or another machine would mislead
+                r.update(wall_seconds=None, cpu_seconds=None, untimed=True)
+                print("table1.py: %d %s: no segment of %s ran on %s, %d thread(s), binary %s: not timed"
+                      % (size, r["mesh"], r["ledger_row"], *machine), file=sys.stderr)
                 continue
             r.update(t)
             lo = [g["min"] for g in segs if g["min"] is not None]

@@ -4,7 +4,9 @@
 # (NaN injected on purpose) ends with exit 3 naming the step, and the last
 # good checkpoint stays intact and restartable. No temporary file is left.
 # An internal error on one rank alone (injected) ends both ranks at once,
-# named by its rank, with the last checkpoint intact.
+# named by its rank, with the last checkpoint intact; a failure both ranks
+# agree on (a checkpoint that cannot be renamed into place) ends them with
+# exit 1, one message and no temporary file.
 # Usage: failures_np2.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
@@ -55,7 +57,7 @@ echo "ok NaN at step 12: exit 3, checkpoint of step 10 intact and restartable"
 # An internal error on rank 1 alone before step 12: rank 0 waits for it in the
 # step's halo exchange, so only an abort ends the run.
 status=0
-DRAPE_FAULT_NAN_STEP=12 DRAPE_FAULT_INTERNAL_RANK=1 OMP_NUM_THREADS=1 timeout 60 "$mpiexec" -n 2 "$drape" \
+DRAPE_FAULT_NAN_STEP=12 DRAPE_FAULT_INTERNAL_RANK=1 OMP_NUM_THREADS=1 timeout -k 10 60 "$mpiexec" -n 2 "$drape" \
   "${scene[@]}" --set solver.steps=40 --set output.checkpoint_every=5 --output "$work/internal" \
   > "$work/internal.out" 2>&1 || status=$?
 cat "$work/internal.out"
@@ -77,3 +79,17 @@ grep -qx "drape: error: internal: fault injected on purpose (DRAPE_FAULT_INTERNA
   { cat "$work/internal1.out"; echo "FAIL: one rank: not the internal error's message"; exit 1; }
 no_tmp "$work/internal1"
 echo "ok internal error on one rank: exit 1, no temporary file"
+
+# A failure the ranks agree on: rank 0 cannot rename the first checkpoint
+# into place (a non-empty directory holds its name). Both unwind together.
+mkdir -p "$work/agreed/checkpoint.h5" && touch "$work/agreed/checkpoint.h5/keep"
+status=0
+OMP_NUM_THREADS=1 timeout -k 10 60 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set solver.steps=40 \
+  --set output.checkpoint_every=5 --output "$work/agreed" > "$work/agreed.out" 2>&1 || status=$?
+cat "$work/agreed.out"
+[[ $status == 1 ]] || { echo "FAIL: agreed failure: exit status $status, expected 1"; exit 1; }
+[[ $(grep -c "drape: error:" "$work/agreed.out") == 1 ]] || { echo "FAIL: agreed failure: not one message"; exit 1; }
+grep -q "drape: error: checkpoint: cannot rename" "$work/agreed.out" ||
+  { echo "FAIL: agreed failure: the message does not name the checkpoint"; exit 1; }
+no_tmp "$work/agreed"
+echo "ok a checkpoint that cannot be placed: exit 1, one message, no temporary file"

@@ -3,6 +3,7 @@ gets its time on the AMRC row's machine (the segments timed there give the
 rate per particle-iteration; the others' work is counted at that rate). A
 machine is (host, threads, binary): segments of other code are counted at
 the rate, not timed."""
+import importlib.util
 import os
 import sys
 import tempfile
@@ -91,6 +92,18 @@ class Ledger(unittest.TestCase):
         self.assertAlmostEqual(rows[1]["wall_seconds"], 12.0)
         self.assertIn("binary b2", rows[0]["machine"])
 
+    def test_a_row_never_run_on_the_reference_machine_is_not_timed(self):
+        # 9-amrc-lo ran binary b2, the finest row only b1: no rate for b2.
+        with open(self.path, "a") as f:
+            f.write(line("9-amrc-lo", "9-amrc-lo", 12, 18, 1500, "vm", 1, cpu=11, binary="b2"))
+        rows = [{"size": 9, "mesh": m, "grid": [9, 9], "wall_seconds": 1.0, "particles_min": 0,
+                 "particles_max": 0, "ledger_row": name}
+                for m, name in (("finest", "9-finest"), ("AMRC", "9-amrc-lo"))]
+        table1.apply_ledger(rows, table1.ledger_segments(self.path))
+        self.assertIsNone(rows[0]["wall_seconds"])  # not its last segment's report time
+        self.assertTrue(rows[0]["untimed"])
+        self.assertAlmostEqual(rows[1]["wall_seconds"], 12.0)
+
     def test_a_run_folder_names_its_ledger_row(self):
         seg = os.path.join(self.dir.name, "257-amrc-lo.3")
         os.mkdir(seg)
@@ -98,9 +111,10 @@ class Ledger(unittest.TestCase):
         self.assertEqual(table1.ledger_row(os.path.join(self.dir.name, "257-amrc")), "257-amrc-lo")
         self.assertEqual(table1.ledger_row(os.path.join(self.dir.name, "129-finest")), "129-finest")
 
+    @unittest.skipUnless(importlib.util.find_spec("matplotlib"), "matplotlib (run/setup installs it)")
     def test_the_error_picture_is_drawn_from_the_final_frames(self):
         # A 5 x 5 finest drape, AMRC's 1 cm above it, the coarsest's 3 x 3
-        # 2 cm above: the picture's scale is the larger, 0.02 of the 1 m width.
+        # 2 cm above it: a PNG is written.
         def run(name, n, lift, level):
             os.mkdir(os.path.join(self.dir.name, name))
             u = np.linspace(0, 1, n)

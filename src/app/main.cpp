@@ -120,6 +120,8 @@ int main(int argc, char** argv) {
     return fail(2, e.what());
   } catch (const drape::NumericalError& e) {
     return fail(3, e.what());
+  } catch (const drape::CollectiveError& e) {
+    return fail(1, e.what());
   } catch (const std::exception& e) {
     return fail_internal(e.what());
   }

@@ -216,149 +216,151 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   };
   own_blocks();
 
+  // From here on files are open collectively: an error that struck this
+  // rank alone must end every rank before unwinding reaches a collective
+  // close (the others would wait in it, or in the step's exchange, forever).
+  // So the output lives outside the try, and is closed after the handler.
   std::unique_ptr<Hdf5Output> h5;
-  // The state as written: ghosts and hanging particles current, inactive
-  // particles on their leaf's surface.
-  auto settle_for_output = [&] {
-    loop.refresh_ghosts(false);
-    if (amrc) amrc->fill_inactive(cloth);
-  };
-  auto write_frame = [&] {
-    settle_for_output();
-    h5->write_frame(frame_of(cloth, blocks));
-  };
-  {
-    ScopedPhase ph(tm, kOutput);
-    h5 = std::make_unique<Hdf5Output>(opt.output_dir, comm, scene, opt.scene_toml, fabric,
-                                      cloth.grid.ni, cloth.grid.nj, opt.restart ? cloth.step : -1);
-    // A restart drops the interrupted part's final frame unless it lies on
-    // the frame cadence, so the continued file matches an uninterrupted run's.
-    if (!opt.restart || (scene.output.every > 0 && cloth.step % scene.output.every == 0)) {
-      write_frame();
-      last_frame = cloth.step;
-    }
-  }
-  if (talk) {
-    std::printf("drape %s: %s, %d x %d particles (%lld free), fabric %s, %d rank(s) x %d thread(s)\n",
-                DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
-                (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
-    if (ranks > 1)
-      std::printf("tiles: %d of %d x %d particles, METIS over %d ranks: imbalance %.3f, edge cut %lld, "
-                  "rank 0 has %lld ghosts from %d neighbour(s)\n",
-                  tiling.count(), scene.cloth.tile, scene.cloth.tile, ranks, dec.partition.imbalance,
-                  (long long)dec.partition.edge_cut, (long long)dec.halo->ghosts(), dec.halo->neighbours());
-    if (opt.restart)
-      std::printf("continuing %s from step %d (t = %.6g s)\n", opt.restart->path.c_str(), cloth.step,
-                  cloth.time);
-  }
-
-  Progress progress(talk, scene.solver.steps, scene.solver.wall_limit, cloth.step);
-  // Stop requests are polled every iteration and agreed on by all ranks, so
-  // that every rank stops at the same iteration: a signal on any rank, or
-  // the wall-clock budget on rank 0's clock. Code: 2 * signal + budget.
-  int stop_code = 0;
-  auto stop_now = [&] {
-    if (stop_code) return true;
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const bool budget = rank == 0 && scene.solver.wall_limit > 0 && elapsed > scene.solver.wall_limit;
-    stop_code = max_over_ranks(comm, 2 * stop_signal() + (budget ? 1 : 0));
-    return stop_code != 0;
-  };
-  loop.stop_requested = stop_now;
-  auto checkpoint = [&] {
-    ScopedPhase ph(tm, kOutput);
-    sum.counters.cg_first_step = loop.minimizer().first_step();
-    write_checkpoint(opt.output_dir, comm, cloth, blocks, opt.scene_toml, fabric, sum.counters,
-                     amrc ? amrc->tree().levels() : std::vector<uint8_t>{});
-    sum.checkpoint = opt.output_dir + "/checkpoint.h5";
-    return cloth.step;
-  };
-  const int every = scene.output.every, ck_every = scene.output.checkpoint_every;
-  const int poison = fault_step();
-  const bool poison_throws = fault_internal_rank() >= 0;
-  int last_checkpoint = opt.restart ? cloth.step : -1;
-  // AMRC between steps (the paper checks every few CG iterations; between
-  // steps the minimiser never sees the mesh change under it).
-  auto mesh_changed = [&] {
-    amrc->lift_new_particles(cloth, model.contact);
-    if (ranks > 1) {
-      ScopedPhase ph(tm, kMigrate);
-      Rebalance rb;
-      rb.step = cloth.step;
-      if (rebalance(dec, cloth, tiling, scene.parallel.imbalance, comm, rb)) {
-        own_blocks();
-        sum.rebalances.push_back(rb);
-        if (talk)
-          std::printf("rebalance after step %d (%s): imbalance %.3f -> %.3f, %d tile(s) moved (%.1f kB), "
-                      "edge cut %lld\n",
-                      rb.step, rb.method, rb.imbalance_before, rb.imbalance_after, rb.tiles_moved,
-                      rb.bytes_moved / 1024.0, (long long)rb.edge_cut);
+  try {
+    // The state as written: ghosts and hanging particles current, inactive
+    // particles on their leaf's surface.
+    auto settle_for_output = [&] {
+      loop.refresh_ghosts(false);
+      if (amrc) amrc->fill_inactive(cloth);
+    };
+    auto write_frame = [&] {
+      settle_for_output();
+      h5->write_frame(frame_of(cloth, blocks));
+    };
+    {
+      ScopedPhase ph(tm, kOutput);
+      h5 = std::make_unique<Hdf5Output>(opt.output_dir, comm, scene, opt.scene_toml, fabric,
+                                        cloth.grid.ni, cloth.grid.nj, opt.restart ? cloth.step : -1);
+      // A restart drops the interrupted part's final frame unless it lies on
+      // the frame cadence, so the continued file matches an uninterrupted run's.
+      if (!opt.restart || (scene.output.every > 0 && cloth.step % scene.output.every == 0)) {
+        write_frame();
+        last_frame = cloth.step;
       }
     }
-    rebuild_lists();
-    loop.mesh_changed();
-    const int64_t active = active_particles(cloth);
-    sum.active_min = std::min(sum.active_min, active);
-    sum.active_max = std::max(sum.active_max, active);
-    sum.active_final = active;
-  };
-  auto adapt_mesh = [&] {
-    AdaptStats a;
-    {
-      ScopedPhase ph(tm, kAmrc);
-      loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
-      const Thresholds th{scene.amrc.refine, scene.amrc.coarsen, scene.amrc.coarsen_speed,
-                          scene.amrc.indicator == AmrcIndicator::Deflection};
-      a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, th, {&tiling, &dec.owned, &red},
-                      &model.contact.obstacle);
+    if (talk) {
+      std::printf("drape %s: %s, %d x %d particles (%lld free), fabric %s, %d rank(s) x %d thread(s)\n",
+                  DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
+                  (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
+      if (ranks > 1)
+        std::printf("tiles: %d of %d x %d particles, METIS over %d ranks: imbalance %.3f, edge cut %lld, "
+                    "rank 0 has %lld ghosts from %d neighbour(s)\n",
+                    tiling.count(), scene.cloth.tile, scene.cloth.tile, ranks, dec.partition.imbalance,
+                    (long long)dec.partition.edge_cut, (long long)dec.halo->ghosts(), dec.halo->neighbours());
+      if (opt.restart)
+        std::printf("continuing %s from step %d (t = %.6g s)\n", opt.restart->path.c_str(), cloth.step,
+                    cloth.time);
     }
-    sum.refined += a.refined;
-    sum.coarsened += a.coarsened;
-    sum.refined_inside += a.refined_inside;
-    if (a.refined != 0 || a.coarsened != 0) mesh_changed();
-  };
-  // Grid sequencing: the cloth at rest on a coarse mesh goes on on the next finer one.
-  double ease_until = 0;  // stretched edges eased by the last split relax until this time
-  auto refine_everywhere = [&] {
-    {
-      ScopedPhase ph(tm, kAmrc);
-      loop.refresh_ghosts(true);
-      amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level);
-    }
-    stage_physics(model, scene, finest_force_scale, sequencing, sequence_level);
-    mesh_changed();
-    const double eased = red.max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
-    ease_until = cloth.time + eased / kEaseRate;
-    sum.stages.push_back({cloth.step, cloth.time, sequence_level, sum.active_final});
-    if (talk)
-      std::printf("at rest after step %d (t = %.4g s): every leaf split, level %d now, %lld particles; "
-                  "edges eased from up to %.1f %% strain\n",
-                  cloth.step, cloth.time, sequence_level, (long long)sum.active_final, 100 * eased);
-  };
-  // A finer mesh costs at least 4 times this one (4 times the particles):
-  // when the wall budget left would not cover that, the run ends here, at
-  // rest on this mesh, rather than out of time on the next one mid-motion.
-  auto stage_start = std::chrono::steady_clock::now();
-  auto finer_mesh_fits = [&] {
-    const auto now = std::chrono::steady_clock::now();
-    const double stage = std::chrono::duration<double>(now - stage_start).count();
-    const double left = scene.solver.wall_limit - std::chrono::duration<double>(now - t0).count();
-    const bool fits = root_decides(comm, scene.solver.wall_limit <= 0 || 4 * stage < left);
-    if (fits) stage_start = now;
-    else if (talk)
-      std::printf("at rest after step %d (t = %.4g s) on level %d: the next finer mesh would take about %.0f s "
-                  "of the %.0f s left (solver.wall_limit): ending here\n",
-                  cloth.step, cloth.time, sequence_level, 4 * stage, left);
-    sum.sequence_cut_short = !fits;
-    return fits;
-  };
-  const double g = std::sqrt(model.gravity[0] * model.gravity[0] + model.gravity[1] * model.gravity[1] +
-                             model.gravity[2] * model.gravity[2]);
-  const LoopClock clock0 = loop_clock();
-  const auto stepping0 = std::chrono::steady_clock::now();
-  // The steps are where one rank can fail alone (the collective failures,
-  // bad input and a numerical failure, are raised on every rank together).
-  try {
+
+    Progress progress(talk, scene.solver.steps, scene.solver.wall_limit, cloth.step);
+    // Stop requests are polled every iteration and agreed on by all ranks, so
+    // that every rank stops at the same iteration: a signal on any rank, or
+    // the wall-clock budget on rank 0's clock. Code: 2 * signal + budget.
+    int stop_code = 0;
+    auto stop_now = [&] {
+      if (stop_code) return true;
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const bool budget = rank == 0 && scene.solver.wall_limit > 0 && elapsed > scene.solver.wall_limit;
+      stop_code = max_over_ranks(comm, 2 * stop_signal() + (budget ? 1 : 0));
+      return stop_code != 0;
+    };
+    loop.stop_requested = stop_now;
+    auto checkpoint = [&] {
+      ScopedPhase ph(tm, kOutput);
+      sum.counters.cg_first_step = loop.minimizer().first_step();
+      write_checkpoint(opt.output_dir, comm, cloth, blocks, opt.scene_toml, fabric, sum.counters,
+                       amrc ? amrc->tree().levels() : std::vector<uint8_t>{});
+      sum.checkpoint = opt.output_dir + "/checkpoint.h5";
+      return cloth.step;
+    };
+    const int every = scene.output.every, ck_every = scene.output.checkpoint_every;
+    const int poison = fault_step();
+    const bool poison_throws = fault_internal_rank() >= 0;
+    int last_checkpoint = opt.restart ? cloth.step : -1;
+    // AMRC between steps (the paper checks every few CG iterations; between
+    // steps the minimiser never sees the mesh change under it).
+    auto mesh_changed = [&] {
+      amrc->lift_new_particles(cloth, model.contact);
+      if (ranks > 1) {
+        ScopedPhase ph(tm, kMigrate);
+        Rebalance rb;
+        rb.step = cloth.step;
+        if (rebalance(dec, cloth, tiling, scene.parallel.imbalance, comm, rb)) {
+          own_blocks();
+          sum.rebalances.push_back(rb);
+          if (talk)
+            std::printf("rebalance after step %d (%s): imbalance %.3f -> %.3f, %d tile(s) moved (%.1f kB), "
+                        "edge cut %lld\n",
+                        rb.step, rb.method, rb.imbalance_before, rb.imbalance_after, rb.tiles_moved,
+                        rb.bytes_moved / 1024.0, (long long)rb.edge_cut);
+        }
+      }
+      rebuild_lists();
+      loop.mesh_changed();
+      const int64_t active = active_particles(cloth);
+      sum.active_min = std::min(sum.active_min, active);
+      sum.active_max = std::max(sum.active_max, active);
+      sum.active_final = active;
+    };
+    auto adapt_mesh = [&] {
+      AdaptStats a;
+      {
+        ScopedPhase ph(tm, kAmrc);
+        loop.refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
+        const Thresholds th{scene.amrc.refine, scene.amrc.coarsen, scene.amrc.coarsen_speed,
+                            scene.amrc.indicator == AmrcIndicator::Deflection};
+        a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, th, {&tiling, &dec.owned, &red},
+                        &model.contact.obstacle);
+      }
+      sum.refined += a.refined;
+      sum.coarsened += a.coarsened;
+      sum.refined_inside += a.refined_inside;
+      if (a.refined != 0 || a.coarsened != 0) mesh_changed();
+    };
+    // Grid sequencing: the cloth at rest on a coarse mesh goes on on the next finer one.
+    double ease_until = 0;  // stretched edges eased by the last split relax until this time
+    auto refine_everywhere = [&] {
+      {
+        ScopedPhase ph(tm, kAmrc);
+        loop.refresh_ghosts(true);
+        amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level);
+      }
+      stage_physics(model, scene, finest_force_scale, sequencing, sequence_level);
+      mesh_changed();
+      const double eased = red.max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
+      ease_until = cloth.time + eased / kEaseRate;
+      sum.stages.push_back({cloth.step, cloth.time, sequence_level, sum.active_final});
+      if (talk)
+        std::printf("at rest after step %d (t = %.4g s): every leaf split, level %d now, %lld particles; "
+                    "edges eased from up to %.1f %% strain\n",
+                    cloth.step, cloth.time, sequence_level, (long long)sum.active_final, 100 * eased);
+    };
+    // A finer mesh costs at least 4 times this one (4 times the particles):
+    // when the wall budget left would not cover that, the run ends here, at
+    // rest on this mesh, rather than out of time on the next one mid-motion.
+    auto stage_start = std::chrono::steady_clock::now();
+    auto finer_mesh_fits = [&] {
+      const auto now = std::chrono::steady_clock::now();
+      const double stage = std::chrono::duration<double>(now - stage_start).count();
+      const double left = scene.solver.wall_limit - std::chrono::duration<double>(now - t0).count();
+      const bool fits = root_decides(comm, scene.solver.wall_limit <= 0 || 4 * stage < left);
+      if (fits) stage_start = now;
+      else if (talk)
+        std::printf("at rest after step %d (t = %.4g s) on level %d: the next finer mesh would take "
+                    "about %.0f s of the %.0f s left (solver.wall_limit): ending here\n",
+                    cloth.step, cloth.time, sequence_level, 4 * stage, left);
+      sum.sequence_cut_short = !fits;
+      return fits;
+    };
+    const double g = std::sqrt(model.gravity[0] * model.gravity[0] + model.gravity[1] * model.gravity[1] +
+                               model.gravity[2] * model.gravity[2]);
+    const LoopClock clock0 = loop_clock();
+    const auto stepping0 = std::chrono::steady_clock::now();
     while (cloth.step < scene.solver.steps) {
       if (poison == cloth.step + 1 && !poison_throws) inject_nan(cloth, lists);
       if (poison == cloth.step + 1 && fault_internal_rank() == rank)
@@ -393,57 +395,59 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       if (ck_every > 0 && st.step % ck_every == 0) last_checkpoint = checkpoint();
       if (sum.at_rest || reached || stop_now()) break;
     }
+    sum.signal = stop_code / 2;
+    sum.final_level = sequence_level;
+    sum.stopped_by_wall_limit = stop_code == 1;
+    // A stopped run always leaves a checkpoint to continue from; a finished
+    // one does when checkpoints were asked for.
+    if ((stop_code || ck_every > 0) && last_checkpoint != cloth.step) last_checkpoint = checkpoint();
+    if (talk && sum.stopped_by_wall_limit)
+      std::printf("wall limit of %.0f s reached after step %d: ending the run\n", scene.solver.wall_limit,
+                  cloth.step);
+    if (rank == 0 && sum.signal)
+      std::printf("%s received: the step in progress was rolled back; the state after step %d is in "
+                  "%s (continue with: drape --restart %s)\n",
+                  signal_name(sum.signal), cloth.step, sum.checkpoint.c_str(), sum.checkpoint.c_str());
+    if (scene.solver.rest_speed <= 0) sum.at_rest = sum.last.max_speed < 1e-3;
+    sum.table2 = table2(clock0, loop_clock(),
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - stepping0).count(),
+                        threads);
+    sum.decomp = decomp_stats(dec, tiling, comm);
+    const double depth = max_penetration(cloth, model, lists, red);
+    sum.zigzag = count_zigzags(cloth, lists.particles.items, red);
+    settle_for_output();
+    const Checksum ck = state_checksum(cloth, tiling, owned, red);
+    {
+      ScopedPhase ph(tm, kOutput);
+      if (cloth.step != last_frame) write_frame();  // the final state
+      h5->finish();
+      if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
+      if (rank == 0 && scene.output.picture)
+        render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png");
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
+    if (rank == 0) {
+      write_text_atomically(opt.output_dir + "/report.json",
+                            report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
+                                        depth, loop.free_particles()));
+      if (!opt.quiet) {
+        progress.finish(sum.at_rest, depth, sum.zigzag.share());
+        print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks);
+        print_table2(sum.table2, threads);
+      }
+    }
+    return 0;
   } catch (const InputError&) {
     throw;
   } catch (const NumericalError&) {
+    throw;
+  } catch (const CollectiveError&) {
     throw;
   } catch (const std::exception& e) {
     if (ranks == 1) throw;
     end_all_ranks(comm, e.what());
   }
-  sum.signal = stop_code / 2;
-  sum.final_level = sequence_level;
-  sum.stopped_by_wall_limit = stop_code == 1;
-  // A stopped run always leaves a checkpoint to continue from; a finished
-  // one does when checkpoints were asked for.
-  if ((stop_code || ck_every > 0) && last_checkpoint != cloth.step) last_checkpoint = checkpoint();
-  if (talk && sum.stopped_by_wall_limit)
-    std::printf("wall limit of %.0f s reached after step %d: ending the run\n", scene.solver.wall_limit,
-                cloth.step);
-  if (rank == 0 && sum.signal)
-    std::printf("%s received: the step in progress was rolled back; the state after step %d is in "
-                "%s (continue with: drape --restart %s)\n",
-                signal_name(sum.signal), cloth.step, sum.checkpoint.c_str(), sum.checkpoint.c_str());
-  if (scene.solver.rest_speed <= 0) sum.at_rest = sum.last.max_speed < 1e-3;
-  sum.table2 = table2(clock0, loop_clock(),
-                      std::chrono::duration<double>(std::chrono::steady_clock::now() - stepping0).count(),
-                      threads);
-  sum.decomp = decomp_stats(dec, tiling, comm);
-  const double depth = max_penetration(cloth, model, lists, red);
-  sum.zigzag = count_zigzags(cloth, lists.particles.items, red);
-  settle_for_output();
-  const Checksum ck = state_checksum(cloth, tiling, owned, red);
-  {
-    ScopedPhase ph(tm, kOutput);
-    if (cloth.step != last_frame) write_frame();  // the final state
-    h5->finish();
-    if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
-    if (rank == 0 && scene.output.picture)
-      render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png");
-  }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
-  if (rank == 0) {
-    write_text_atomically(opt.output_dir + "/report.json",
-                          report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
-                                      depth, loop.free_particles()));
-    if (!opt.quiet) {
-      progress.finish(sum.at_rest, depth, sum.zigzag.share());
-      print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks);
-      print_table2(sum.table2, threads);
-    }
-  }
-  return 0;
 }
 
 }  // namespace drape

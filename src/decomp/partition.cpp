@@ -137,12 +137,12 @@ Partition partition_tiles(const Tiling& tl, const std::vector<int64_t>& work, MP
   }
   // Rank 0's verdict and parts reach every rank, so none waits alone.
   MPI_Bcast(error, sizeof error, MPI_CHAR, 0, comm);
-  if (error[0]) throw std::runtime_error(error);
+  if (error[0]) throw CollectiveError(error);
   p.owner.resize(tl.count());
   MPI_Bcast(p.owner.data(), tl.count(), MPI_INT, 0, comm);
   if (rank != 0) fill_stats(tl, work, ranks, p);
   for (int r = 0; r < ranks; ++r)
-    if (p.work[r] == 0) throw std::runtime_error("partition: rank " + std::to_string(r) + " got no tile");
+    if (p.work[r] == 0) throw CollectiveError("partition: rank " + std::to_string(r) + " got no tile");
   return p;
 }
 

@@ -34,7 +34,7 @@ Partition partition_with(const Tiling& tiling, const std::vector<int>& owner, co
 Partition partition_graph(const Tiling& tiling, const std::vector<int64_t>& work, int parts);
 
 // Collective: rank 0 partitions, every rank gets the same result. More ranks
-// than tiles is an InputError; a METIS failure a runtime_error, on every rank.
+// than tiles is an InputError; a METIS failure a CollectiveError, on every rank.
 Partition partition_tiles(const Tiling& tiling, const std::vector<int64_t>& work, MPI_Comm comm);
 
 }  // namespace drape

@@ -245,7 +245,7 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
     }
   }
   error = root_error(comm, error);
-  if (!error.empty()) throw std::runtime_error("checkpoint: " + error);
+  if (!error.empty()) throw CollectiveError("checkpoint: " + error);
 }
 
 // ------------------------------------------------------------- reading --

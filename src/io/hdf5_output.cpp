@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "decomp/collective.hpp"
+#include "io/error.hpp"
 #include "io/h5.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
@@ -346,9 +347,9 @@ void Hdf5Output::Impl::write(const FrameView& f) {
   const unsigned has = (f.tension ? 1u : 0u) | (f.moment ? 2u : 0u) | (f.shear ? 4u : 0u) | (f.level ? 8u : 0u);
   const unsigned all = or_over_ranks(comm, has | (~has & 15u) << 4 | (problem.empty() ? 0u : 256u));
   if (all & 256u)
-    throw std::runtime_error("HDF5 output: " +
-                             (problem.empty() ? std::string("another rank's frame is invalid") : problem));
-  if (all & (all >> 4) & 15u) throw std::runtime_error("HDF5 output: ranks disagree on the arrays of a frame");
+    throw CollectiveError("HDF5 output: " +
+                          (problem.empty() ? std::string("another rank's frame is invalid") : problem));
+  if (all & (all >> 4) & 15u) throw CollectiveError("HDF5 output: ranks disagree on the arrays of a frame");
 
   const std::string name = frame_name(f.step);
   Handle group = create_group(frames.get(), name);
@@ -400,7 +401,7 @@ void Hdf5Output::Impl::close_and_publish() {
   }
   error = root_error(comm, error);
   finished = true;
-  if (!error.empty()) throw std::runtime_error("HDF5 output: " + error);
+  if (!error.empty()) throw CollectiveError("HDF5 output: " + error);
 }
 
 // Collective, like the close it makes; removes the incomplete file.
