@@ -104,6 +104,22 @@ class Ledger(unittest.TestCase):
         self.assertTrue(rows[0]["untimed"])
         self.assertAlmostEqual(rows[1]["wall_seconds"], 12.0)
 
+    def test_surface_distance_ignores_sliding_along_the_surface(self):
+        # The finest drape a plane z = 0.5 x; the other the same grid moved
+        # 0.02 along the plane's normal and 0.3 spacings along the plane:
+        # inside, 0.02 from the surface, more from the same material points.
+        u = np.linspace(0, 1, 21)
+        i, j = np.meshgrid(u, u, indexing="ij")
+        ref = np.stack([i, j, 0.5 * i], axis=2)
+        normal = np.array([-0.5, 0, 1]) / np.sqrt(1.25)
+        along = np.array([1, 0, 0.5]) / np.sqrt(1.25)
+        x = ref + 0.02 * normal + 0.3 * 0.05 * along
+        d = table1.surface_distance(x, ref)
+        np.testing.assert_allclose(d[2:-2, 2:-2], 0.02, rtol=1e-9)
+        self.assertGreater(np.linalg.norm(x - ref, axis=2).min(), 0.024)
+        # Points moved off the plane's far edge are as far as that edge.
+        self.assertGreater(table1.surface_distance(ref + [0.5, 0, 0], ref)[-1, 10], 0.4)
+
     def test_a_run_folder_names_its_ledger_row(self):
         seg = os.path.join(self.dir.name, "257-amrc-lo.3")
         os.mkdir(seg)
