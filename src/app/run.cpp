@@ -280,7 +280,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     };
     const int every = scene.output.every, ck_every = scene.output.checkpoint_every;
     const int poison = fault_step();
-    const bool poison_throws = fault_internal_rank() >= 0;
+    const int poison_rank = fault_internal_rank();  // -1: the step is poisoned with a NaN
     int last_checkpoint = opt.restart ? cloth.step : -1;
     // AMRC between steps (the paper checks every few CG iterations; between
     // steps the minimiser never sees the mesh change under it).
@@ -362,8 +362,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     const LoopClock clock0 = loop_clock();
     const auto stepping0 = std::chrono::steady_clock::now();
     while (cloth.step < scene.solver.steps) {
-      if (poison == cloth.step + 1 && !poison_throws) inject_nan(cloth, lists);
-      if (poison == cloth.step + 1 && fault_internal_rank() == rank)
+      if (poison == cloth.step + 1 && poison_rank < 0) inject_nan(cloth, lists);
+      if (poison == cloth.step + 1 && poison_rank == rank)
         throw std::logic_error("fault injected on purpose (DRAPE_FAULT_INTERNAL_RANK)");
       const StepStats st =
           loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
