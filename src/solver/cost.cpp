@@ -118,19 +118,19 @@ void Evaluator::list_rows() {
 
 // ---- pass 1: element forces and band costs -------------------------------
 
-void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z) {
+void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* settle) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   const int64_t q = nb_e_[pos];
   V g[2];
   const double L = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
-  const double f = z[c_.layout.tension() + s];
+  const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
+  const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
+  const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
   put(&buf_e_[kEdgeSlot * pos + 3], g[1], f * w);
-  const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
-  const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_e_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -138,7 +138,7 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z) {
   gf_e_[s] = (sigma + m_.memory * mem) * lam;
 }
 
-void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z) {
+void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
   const int d = int(s & 1);
   int64_t ids[3];
   triple_ids(s, pos, ids);
@@ -146,11 +146,11 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z) {
   const V n = load3<double>(&c_.bend_axis[3 * s]);
   const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
-  const double f = z[c_.layout.moment() + s];
-  for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
   const BandValue bv = m_.bend[d].at(th / Lm);
-  const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
+  const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
+  for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
+  const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_t_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -158,18 +158,18 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z) {
   gf_t_[s] = (sigma + m_.memory * mem) * lam;
 }
 
-void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z) {
+void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* settle) {
   int64_t ids[4];
   cell_ids(s, pos, ids);
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
   const double A = c_.shear_area[s];
-  const double f = z[c_.layout.shear() + s];
-  for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
   const BandValue bv = m_.shear.at(phi);
-  const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
+  const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
+  for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
+  const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
@@ -317,16 +317,31 @@ CostTerms Evaluator::reduce_costs() {
   return {sums[0], sums[1], sums[2], sums[3]};
 }
 
+// The cost pass: element forces and band costs, then each particle's
+// residual. settle: see settled_cost.
+CostTerms Evaluator::cost_pass(double* z, double* settle) {
+  elements_then_particles([&](int64_t s, int64_t pos) { edge_forces(s, pos, z, settle); },
+                          [&](int64_t s, int64_t pos) { triple_forces(s, pos, z, settle); },
+                          [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
+                          [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
+  clear_hanging(hres_);
+  return reduce_costs();
+}
+
+CostTerms Evaluator::settled_cost(double* z) {
+  list_rows();
+  // The ring's elements are settled here too, from the same positions and
+  // anchors as their owners': no force halo (ranks_agree checks the bits).
+  halo_.exchange(z, Halo::kPositions);
+  interpolate_hanging(z);
+  return cost_pass(z, z);
+}
+
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   list_rows();
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
-  elements_then_particles([&](int64_t s, int64_t pos) { edge_forces(s, pos, z); },
-                          [&](int64_t s, int64_t pos) { triple_forces(s, pos, z); },
-                          [&](int64_t s, int64_t pos) { shear_forces(s, pos, z); }, [&] { hanging_forces(z); },
-                          [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
-  clear_hanging(hres_);
-  const CostTerms cost = reduce_costs();
+  const CostTerms cost = cost_pass(z, nullptr);
   if (!grad) return cost;
   halo_.exchange_particles(rho_.data(), 3);
   hanging_residuals();

@@ -53,6 +53,10 @@ class Evaluator {
   void scaling_diagonal(double* z, double* diag);
 
   // --- the Newton solver's view (src/solver/stiffness.cpp) ---
+  // hysteresis_forces(z) then evaluate(z, nullptr), bit for bit, in one pass
+  // over the elements: each element's strain, band and geometry are computed
+  // once instead of twice (a line search trial's whole work).
+  CostTerms settled_cost(double* z);
   // Sets every active element force to its hysteresis target (Band::stop) at
   // the positions in z: there the band and memory costs vanish and the cost
   // is the Newton term alone, a function of the positions.
@@ -72,7 +76,7 @@ class Evaluator {
   // once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
   // Whether stiffness_product keeps its z-only numbers across a linear
-  // solve (54 doubles a particle of the grid; on from the start): off, every
+  // solve (55 doubles a particle of the grid; on from the start): off, every
   // product computes them again, the same numbers (bench_gradient's
   // BM_KeptProducts times both). Allocates: call it before the time loop.
   void keep_products(bool on);
@@ -96,9 +100,12 @@ class Evaluator {
  private:
   // Element kernels: slot s at position pos of its list (the ring's after
   // this rank's), which places its buffer entries (see rows_).
-  void edge_forces(int64_t s, int64_t pos, const double* z);
-  void triple_forces(int64_t s, int64_t pos, const double* z);
-  void shear_forces(int64_t s, int64_t pos, const double* z);
+  // With settle (z itself), the element's force there is first set to its
+  // hysteresis target at z's positions (settled_cost).
+  void edge_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  CostTerms cost_pass(double* z, double* settle);
   void particle_residual(int64_t p, const GatherRow& row, const double* z);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void triple_gradient(int64_t s, int64_t pos, const double* z, double* grad);
@@ -183,8 +190,9 @@ class Evaluator {
   // stiffness_product's z-only numbers, per list position or particle, kept from the
   // first product at the linear solve's z (keep_products; kg_ready_ until
   // stiffness_diagonal's next z): edges (edge_kept), triples and cells
-  // (slope factor, then the gradient, 3 or 4 x 3), contact (force, size, slope).
-  static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 5;
+  // (slope factor, then the gradient, 3 or 4 x 3), contact (force, size,
+  // slope) and mass coefficient, by row.
+  static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 6;
   bool keep_ = false;
   bool kg_ready_ = false;
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
@@ -311,7 +319,9 @@ inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, d
     const HangingLink& g = lists_.hanging[i];
     double v[3];
     own(g.h, hanging_row(i), v);
-    const double wa = std::pow(1 - g.t, power), wb = std::pow(g.t, power);
+    // pow only for the diagonals: a product's weights are the plain ones.
+    const double wa = power == 1.0 ? 1 - g.t : std::pow(1 - g.t, power);
+    const double wb = power == 1.0 ? g.t : std::pow(g.t, power);
     for (int k = 0; k < 3; ++k) {
       v[k] += hpend_[3 * g.h + k];
       hpend_[3 * g.a + k] += wa * v[k];

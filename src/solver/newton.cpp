@@ -75,8 +75,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   CgResult res;
   {
     ScopedPhase ph(tm, kGradient);
-    ev.hysteresis_forces(z);
-    res.cost = ev.evaluate(z, nullptr);
+    res.cost = ev.settled_cost(z);
   }
   res.evaluations = 1;
   double c0 = res.cost.total();
@@ -108,8 +107,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
       for_each_listed(ev.lists().position_spans, [&](int64_t k) { z[k] = zt[k] + a * scale * d_[k]; });
-      ev.hysteresis_forces(z);
-      const CostTerms trial = ev.evaluate(z, nullptr);
+      const CostTerms trial = ev.settled_cost(z);
       ++res.evaluations;
       if (std::isfinite(trial.total()) && trial.total() < c0) {
         res.cost = trial;
@@ -121,8 +119,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     if (!accepted) {
       // Back to where the line search began; z's residual buffers with it.
       for_each_listed(ev.lists().position_spans, [&](int64_t k) { z[k] = zt[k]; });
-      ev.hysteresis_forces(z);
-      res.cost = ev.evaluate(z, nullptr);
+      res.cost = ev.settled_cost(z);
       res.stalled = true;
       break;
     }

@@ -126,6 +126,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   // first product of a linear solve keeps it, the others read it back, bit for
   // bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
+  const double ca = m_.inertia_coeff();
   auto edge = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1, q = nb_e_[pos];
     double mine[kKgEdge];
@@ -176,26 +177,27 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const double stiff = kg[0] * along(g, ids, 4, v);
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], stiff * g[k]);
   };
-  const double ca = m_.inertia_coeff();
-  // A particle's contact force, its size and slope; size 0 where it does
-  // not touch.
-  auto contact_at = [&](int64_t p, double* mine) -> const double* {
-    double* kc = keep_ ? &kc_[kKc * p] : mine;
+  // A particle's contact force, its size and slope (size 0 where it does
+  // not touch), and its mass term's coefficient; kept by row (rows_), so
+  // that a coarse mesh's particles find theirs on consecutive lines.
+  auto contact_at = [&](int64_t p, size_t row, double* mine) -> const double* {
+    double* kc = keep_ ? &kc_[kKc * row] : mine;
     if (fill) {
       double slope = 0;
       const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
       kc[3] = touching ? std::sqrt(kc[0] * kc[0] + kc[1] * kc[1] + kc[2] * kc[2]) : 0.0;
       kc[4] = slope;
+      kc[5] = c_.mass[p] * ca;
     }
     return kc;
   };
   auto particle = [&](int64_t p, int64_t pos) {
     double mine[kKc];
-    const double* fc = contact_at(p, mine);
+    const double* fc = contact_at(p, size_t(pos), mine);
     const double fn = fc[3], slope = fc[4];
     const double* vp = v + 3 * p;
     double out[3];
-    for (int k = 0; k < 3; ++k) out[k] = c_.mass[p] * ca * vp[k];
+    for (int k = 0; k < 3; ++k) out[k] = fc[5] * vp[k];
     if (fn > 0) {  // slope * n (n.v); n from the force direction
       const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
@@ -210,7 +212,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends(kv, [&](int64_t h, const GatherRow& row, double* out) {  // P^T K P: no mass at h
     double mine[kKc];
-    const double* fc = contact_at(h, mine);
+    const double* fc = contact_at(h, size_t(&row - rows_.data()), mine);
     const double fn = fc[3], slope = fc[4];
     const double* vh = v + 3 * h;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
