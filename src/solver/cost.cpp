@@ -63,7 +63,7 @@ void Evaluator::keep_products(bool on) {
   kg_s_.assign(n * kKgCell, 0.0);
   kc_.assign(n * kKc, 0.0);
   keep_ = on;
-  kg_ready_ = false;
+  kg_ready_ = settled_ = false;
 }
 
 // ---- the element buffers in list order -----------------------------------
@@ -86,7 +86,7 @@ void Evaluator::list_rows() {
   if (rows_stamp_ == lists_.stamp && lists_.stamp != 0 && rows_hanging_ == lists_.hanging.size()) return;
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
-  kg_ready_ = false;  // kept in the old lists' order
+  kg_ready_ = settled_ = false;  // kept in the old lists' order
   // Each element's position (the ring's after the owned) and neighbours.
   auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at, auto&& ends) {
     std::fill(at.begin(), at.end(), -1);
@@ -128,6 +128,7 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
+  if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
   put(&buf_e_[kEdgeSlot * pos + 3], g[1], f * w);
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
@@ -149,6 +150,7 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* s
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
+  if (settle && keep_) kept_gradients(w * st.df_dq / Lm, g, 3, &kg_t_[kKgTriple * pos]);
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
   const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / (Lm * m_.force_scale);
@@ -168,6 +170,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
   const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
+  if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
@@ -334,11 +337,15 @@ CostTerms Evaluator::settled_cost(double* z) {
   // anchors as their owners': no force halo (ranks_agree checks the bits).
   halo_.exchange(z, Halo::kPositions);
   interpolate_hanging(z);
-  return cost_pass(z, z);
+  const CostTerms cost = cost_pass(z, z);
+  settled_ = keep_;  // the elements' kept numbers are z's now (the particles' are not)
+  kg_ready_ = false;
+  return cost;
 }
 
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   list_rows();
+  settled_ = false;
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   const CostTerms cost = cost_pass(z, nullptr);

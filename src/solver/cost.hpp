@@ -83,7 +83,9 @@ class Evaluator {
   // Its diagonal, at the same entries. Also freezes each element's band
   // slope (and each edge's tension) at z for stiffness_product, so that a
   // product evaluates no band, power law or angle: those cost more than the
-  // product's own arithmetic, once per product.
+  // product's own arithmetic, once per product. Right after settled_cost at
+  // the same z (Newton's order), it reads that pass's numbers: the same
+  // diagonal, bit for bit, without the elements' geometry.
   void stiffness_diagonal(const double* z, double* diag);
 
   // Per-slot bending cost of the last evaluate() (the AMRC criterion).
@@ -106,6 +108,7 @@ class Evaluator {
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   CostTerms cost_pass(double* z, double* settle);
+  void settled_diagonal(const double* z, double* diag);
   void particle_residual(int64_t p, const GatherRow& row, const double* z);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void triple_gradient(int64_t s, int64_t pos, const double* z, double* grad);
@@ -193,11 +196,30 @@ class Evaluator {
   // (slope factor, then the gradient, 3 or 4 x 3), contact (force, size,
   // slope) and mass coefficient, by row.
   static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 6;
+  // settled_cost keeps the elements' numbers too (settled_, until another
+  // evaluation or list change): they are its band stops and gradients, so
+  // stiffness_diagonal at the same z reads them instead of computing the
+  // elements' strains, bands and angles a third time.
   bool keep_ = false;
   bool kg_ready_ = false;
+  bool settled_ = false;
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
-  // An edge's numbers into ke, from its ends' positions.
-  void edge_kept(int64_t s, const double* za, const double* zb, double* ke) const;
+  // An edge's numbers into ke, from its ends' positions, its frozen tension,
+  // slope / rest length and width.
+  static void edge_kept(const double* za, const double* zb, double tension, double slope_per_rest, double width,
+                        double* ke);
+  // A triple's or cell's: the slope factor, then the n gradients.
+  template <class V>
+  static void kept_gradients(double factor, const V* g, int n, double* kg) {
+    kg[0] = factor;
+    for (int k = 0; k < n; ++k) {
+      kg[1 + 3 * k] = g[k].x;
+      kg[2 + 3 * k] = g[k].y;
+      kg[3 + 3 * k] = g[k].z;
+    }
+  }
+  // A particle's contact numbers into kc (see kKc), at z.
+  void contact_kept(int64_t p, const double* z, double* kc) const;
   // The element buffers (and stiffness_product's z-only numbers) are in
   // list order: an element's at its position in its list (the ring's after
   // this rank's), so on a coarse AMRC mesh, whose slots lie far apart, an

@@ -63,6 +63,7 @@ double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos) const
 
 void Evaluator::hysteresis_forces(double* z) {
   list_rows();
+  settled_ = false;
   halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
   interpolate_hanging(z);
   const Layout& L = c_.layout;
@@ -104,15 +105,26 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a)
 // An edge's z-only numbers for stiffness_product, as edge_length on duals
 // computes their value parts: e = b - a, |e|, 1/|e| (e/|e| is one product
 // away); then its frozen tension, slope / rest length and width.
-void Evaluator::edge_kept(int64_t s, const double* za, const double* zb, double* ke) const {
+void Evaluator::edge_kept(const double* za, const double* zb, double tension, double slope_per_rest, double width,
+                          double* ke) {
   const V e = load3<double>(zb) - load3<double>(za);
   const double Lv = std::sqrt(dot(e, e));
   put(ke, e);
   ke[3] = Lv;
   ke[4] = 1.0 / Lv;
-  ke[5] = k_tension_[s];
-  ke[6] = k_slope_[s] / c_.edge_rest[s];
-  ke[7] = c_.edge_width[s];
+  ke[5] = tension;
+  ke[6] = slope_per_rest;
+  ke[7] = width;
+}
+
+// What stiffness_product needs of a particle: its contact force, the force's
+// size (0 where it does not touch) and slope, and its mass term's coefficient.
+void Evaluator::contact_kept(int64_t p, const double* z, double* kc) const {
+  double slope = 0;
+  const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
+  kc[3] = touching ? std::sqrt(kc[0] * kc[0] + kc[1] * kc[1] + kc[2] * kc[2]) : 0.0;
+  kc[4] = slope;
+  kc[5] = c_.mass[p] * m_.inertia_coeff();
 }
 
 void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
@@ -126,12 +138,11 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   // first product of a linear solve keeps it, the others read it back, bit for
   // bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
-  const double ca = m_.inertia_coeff();
   auto edge = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1, q = nb_e_[pos];
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
-    if (fill) edge_kept(s, z + 3 * p, z + 3 * q, ke);
+    if (fill) edge_kept(z + 3 * p, z + 3 * q, k_tension_[s], k_slope_[s] / c_.edge_rest[s], c_.edge_width[s], ke);
     // edge_length on duals at (z, v), its eps parts written out in the same
     // operations, with the value parts kept: bit for bit its numbers.
     const V e = load3<double>(ke), ed = at(v, q) - at(v, p);
@@ -154,8 +165,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     if (fill) {
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
-      kg[0] = c_.triple_width[s] * k_slope_[L.moment() - fo + s] / c_.triple_rest[s];
-      for (int k = 0; k < 3; ++k) put(kg + 1 + 3 * k, g[k]);
+      kept_gradients(c_.triple_width[s] * k_slope_[L.moment() - fo + s] / c_.triple_rest[s], g, 3, kg);
     }
     const V g[3] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7)};
     const double stiff = kg[0] * along(g, ids, 3, v);
@@ -170,8 +180,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       const CellAt a = cell_at(ids, z);
       V g[4];
       shear_cell<double, false>(a.x, g);
-      kg[0] = c_.shear_area[s] * k_slope_[L.shear() - fo + s];
-      for (int k = 0; k < 4; ++k) put(kg + 1 + 3 * k, g[k]);
+      kept_gradients(c_.shear_area[s] * k_slope_[L.shear() - fo + s], g, 4, kg);
     }
     const V g[4] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7), load3<double>(kg + 10)};
     const double stiff = kg[0] * along(g, ids, 4, v);
@@ -182,13 +191,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   // that a coarse mesh's particles find theirs on consecutive lines.
   auto contact_at = [&](int64_t p, size_t row, double* mine) -> const double* {
     double* kc = keep_ ? &kc_[kKc * row] : mine;
-    if (fill) {
-      double slope = 0;
-      const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
-      kc[3] = touching ? std::sqrt(kc[0] * kc[0] + kc[1] * kc[1] + kc[2] * kc[2]) : 0.0;
-      kc[4] = slope;
-      kc[5] = c_.mass[p] * ca;
-    }
+    if (fill) contact_kept(p, z, kc);
     return kc;
   };
   auto particle = [&](int64_t p, int64_t pos) {
@@ -226,8 +229,48 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   kg_ready_ = true;
 }
 
+// stiffness_diagonal from the numbers settled_cost kept at z (the same
+// operations on the same values as below); the particles' contact numbers
+// are kept on the way, so that no product computes anything but itself.
+void Evaluator::settled_diagonal(const double* z, double* diag) {
+  auto edge = [&](int64_t, int64_t pos) {
+    const double* ke = &kg_e_[kKgEdge * pos];
+    const V u = ke[4] * load3<double>(ke);  // dk/dx = -u, u: the same |.|^2
+    const double d = ke[7] * (ke[5] / ke[3] + ke[6] * dot(u, u) / 3);
+    buf_e_[kEdgeSlot * pos] = buf_e_[kEdgeSlot * pos + 3] = d;
+  };
+  auto gradients = [](const double* kg, double* buf, int n) {
+    for (int k = 0; k < n; ++k) {
+      const V g = load3<double>(kg + 1 + 3 * k);
+      buf[3 * k] = kg[0] * dot(g, g) / 3;
+    }
+  };
+  auto triple = [&](int64_t, int64_t pos) { gradients(&kg_t_[kKgTriple * pos], &buf_t_[kTripleSlot * pos], 3); };
+  auto shear = [&](int64_t, int64_t pos) { gradients(&kg_s_[kKgCell * pos], &buf_s_[kShearSlot * pos], 4); };
+  auto particle = [&](int64_t p, int64_t pos) {
+    double* kc = &kc_[kKc * pos];
+    contact_kept(p, z, kc);
+    double dsum = kc[5] + kc[4] / 3;
+    gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
+    for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
+  };
+  elements_then_particles(edge, triple, shear, [] {}, particle);
+  hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* out) {
+    double* kc = &kc_[kKc * size_t(&row - rows_.data())];
+    contact_kept(h, z, kc);
+    double dsum = kc[4] / 3;
+    gather_listed(row, [&](const double* c) { dsum += c[0]; });
+    out[0] = out[1] = out[2] = dsum;
+  }, 2.0, 1.0);
+  kg_ready_ = true;
+}
+
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   list_rows();
+  if (settled_) {
+    settled_diagonal(z, diag);
+    return;
+  }
   kg_ready_ = false;  // a new z: stiffness_product computes its gradients again
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
