@@ -168,6 +168,49 @@ void BM_AmrcPerParticle(benchmark::State& state) {
 }
 BENCHMARK(BM_AmrcPerParticle)->Arg(129)->Arg(257)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
+// A Newton step's work outside its linear CG iterations: a line search
+// trial (forces set to their hysteresis targets, the cost), then K's diagonal
+// and the linear solve's first product at the accepted z. Timed both ways
+// back to back in each repetition, on the finest and an AMRC mesh: the
+// separate passes (hysteresis_forces, evaluate, a diagonal and a first
+// product that compute the elements' geometry again) and settled_cost,
+// whose numbers the diagonal and product read. The same numbers, bit for bit
+// (tests: Stiffness.SettledCostIsHysteresisForcesThenEvaluate).
+void BM_NewtonStepOverhead(benchmark::State& state) {
+  const int n = int(state.range(0));
+  static std::map<int, std::unique_ptr<Bed>[2]> made;
+  if (!made.count(n)) made[n][0] = std::make_unique<Bed>(n), made[n][1] = std::make_unique<Bed>(n, true);
+  Bed* beds[2] = {made[n][0].get(), made[n][1].get()};
+  double seconds[2][2] = {};  // [mesh][settled]
+  for (auto _ : state)
+    for (int b = 0; b < 2; ++b)
+      for (int settled = 0; settled < 2; ++settled) {
+        Evaluator& ev = beds[b]->loop->evaluator();
+        double* z = beds[b]->cloth.z.data();
+        const size_t size = beds[b]->cloth.z.size();
+        state.PauseTiming();
+        std::vector<double> v(size, 1e-6), kv(size), diag(size);
+        state.ResumeTiming();
+        seconds[b][settled] += cpu_seconds_of([&] {
+          if (settled) {
+            ev.settled_cost(z);
+          } else {
+            ev.hysteresis_forces(z);
+            ev.evaluate(z, nullptr);
+          }
+          ev.stiffness_diagonal(z, diag.data());
+          ev.stiffness_product(z, v.data(), kv.data());
+        });
+      }
+  const double reps = double(state.iterations());
+  state.counters["share"] = double(beds[1]->active()) / beds[0]->active();
+  state.counters["fine_separate_ms"] = 1e3 * seconds[0][0] / reps;
+  state.counters["fine_settled_over_separate"] = seconds[0][1] / seconds[0][0];
+  state.counters["amrc_separate_ms"] = 1e3 * seconds[1][0] / reps;
+  state.counters["amrc_settled_over_separate"] = seconds[1][1] / seconds[1][0];
+}
+BENCHMARK(BM_NewtonStepOverhead)->Arg(257)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
 // Both gradients timed back to back in each repetition: the ratio is a
 // measurement of one run, not of two runs on a shared machine.
 void BM_NumericOverAnalytic(benchmark::State& state) {
