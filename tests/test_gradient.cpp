@@ -310,6 +310,7 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
       Out o;
       if (settled) {
         o.cost = ev.settled_cost(w.cloth.z.data());
+        EXPECT_TRUE(ev.diagonal_reads_settled()) << "the fast path is not taken: the test does not test";
       } else {
         ev.hysteresis_forces(w.cloth.z.data());
         o.cost = ev.evaluate(w.cloth.z.data(), nullptr);
@@ -350,6 +351,20 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
     same(run(fresh, false), moved, ", z moved");
     EXPECT_NE(first.k1, moved.k1) << "the move changed nothing: the test does not test";
     EXPECT_NE(first.diag, moved.diag) << "the move changed nothing: the test does not test";
+    // Whatever else reaches the evaluator between settled_cost and the
+    // diagonal ends the shortcut: the diagonal then computes everything.
+    Evaluator& ev = one.loop->evaluator();
+    std::vector<double> anchors(one.cloth.anchor.size(), 0.0);
+    const std::function<void()> others[] = {
+        [&] { ev.evaluate(one.cloth.z.data(), nullptr); },
+        [&] { ev.hysteresis_forces(one.cloth.z.data()); },
+        [&] { ev.hysteresis_anchors(one.cloth.x1.data(), one.cloth.z.data(), anchors.data()); },
+        [&] { ev.keep_products(true); }};
+    for (const auto& other : others) {
+      ev.settled_cost(one.cloth.z.data());
+      other();
+      EXPECT_FALSE(ev.diagonal_reads_settled()) << mesh;
+    }
   }
 }
 
@@ -361,7 +376,8 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
 // first gives bit for bit what an evaluator built on the new mesh gives. The
 // changes alternate: a refine (new particles, elements and hanging ones) and
 // a fixed particle (the particle list changes, the hanging ones do not, so
-// only the lists' stamp tells).
+// only the lists' stamp tells). settled_cost comes right before the
+// diagonal: a diagonal first after a change must not read its numbers.
 TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
   World w = random_world(21, true);
   Evaluator& ev = w.loop->evaluator();
@@ -412,6 +428,17 @@ TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
          std::vector<double> z = w.cloth.z, d(n, 0.0);
          e.scaling_diagonal(z.data(), d.data());
          return d;
+       }},
+      {"settled_cost, then stiffness_diagonal and stiffness_product",
+       [&](Evaluator& e) {
+         std::vector<double> z = w.cloth.z, d(n, 0.0), kv(n, 0.0), vv = v;
+         const double cost = e.settled_cost(z.data()).total();
+         e.stiffness_diagonal(z.data(), d.data());
+         e.stiffness_product(z.data(), vv.data(), kv.data());
+         z.insert(z.end(), d.begin(), d.end());
+         z.insert(z.end(), kv.begin(), kv.end());
+         z.push_back(cost);
+         return z;
        }},
       {"stiffness_diagonal, then stiffness_product",
        [&](Evaluator& e) {

@@ -35,7 +35,8 @@ class Evaluator {
   Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists, const Tiling& tiling,
             const LoopPolicy& policy, const Reducer& reducer, const Halo& halo = no_halo());
 
-  // The entry points that take z first refresh its ghost entries (Halo);
+  // The entry points that take z first refresh its ghost entries (Halo;
+  // settled_cost the positions only: it computes the ring's forces itself);
   // those that take a const z expect them current (z was last evaluated).
 
   // Cost at z; the gradient too if grad is non-null (entries of unknowns that
@@ -55,8 +56,12 @@ class Evaluator {
   // --- the Newton solver's view (src/solver/stiffness.cpp) ---
   // hysteresis_forces(z) then evaluate(z, nullptr), bit for bit, in one pass
   // over the elements: each element's strain, band and geometry are computed
-  // once instead of twice (a line search trial's whole work).
+  // once instead of twice (a line search trial's whole work). (On several
+  // ranks the ring's force slots hold its own results, not the owners':
+  // the same numbers, as ranks_agree checks.)
   CostTerms settled_cost(double* z);
+  // Whether stiffness_diagonal would read settled_cost's numbers now.
+  bool diagonal_reads_settled() const { return settled_; }
   // Sets every active element force to its hysteresis target (Band::stop) at
   // the positions in z: there the band and memory costs vanish and the cost
   // is the Newton term alone, a function of the positions.
@@ -72,8 +77,8 @@ class Evaluator {
   // left out so that K stays positive definite). Written at the free
   // particles' positions (hanging ones': 0) only, the entries Newton's
   // vectors live on (ActiveLists::position_spans).
-  // Needs stiffness_diagonal at the same z first (Newton's linear CG calls it
-  // once per solve): it reads the band slopes that call froze.
+  // Needs stiffness_diagonal at the same z and lists first (Newton's linear
+  // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
   // Whether stiffness_product keeps its z-only numbers across a linear
   // solve (55 doubles a particle of the grid; on from the start): off, every
@@ -190,14 +195,15 @@ class Evaluator {
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
   std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
                                                   // the tension block) and edge tensions
-  // stiffness_product's z-only numbers, per list position or particle, kept from the
-  // first product at the linear solve's z (keep_products; kg_ready_ until
-  // stiffness_diagonal's next z): edges (edge_kept), triples and cells
-  // (slope factor, then the gradient, 3 or 4 x 3), contact (force, size,
-  // slope) and mass coefficient, by row.
+  // stiffness_product's z-only numbers (keep_products), the elements' by
+  // list position, the particles' by row (rows_): edges (edge_kept), triples
+  // and cells (slope factor, then the gradient, 3 or 4 x 3), contact (force,
+  // size, slope) and mass coefficient. Kept by settled_cost (elements) and
+  // the diagonal after it (particles), or else by the first product after
+  // a diagonal; kg_ready_ while they are all the linear solve's z's.
   static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 6;
-  // settled_cost keeps the elements' numbers too (settled_, until another
-  // evaluation or list change): they are its band stops and gradients, so
+  // settled_cost keeps the elements' numbers (settled_, until another
+  // evaluation, new anchors or a list change): they are its band stops and gradients, so
   // stiffness_diagonal at the same z reads them instead of computing the
   // elements' strains, bands and angles a third time.
   bool keep_ = false;

@@ -84,6 +84,7 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a)
   // Each element's step-start force f1 (z's force slots) folded into its
   // anchor; only the active elements and the ring's, the ones that read it.
   list_rows();
+  settled_ = false;  // new anchors: the kept stops are not theirs
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   for_edges([&](int64_t s, int64_t pos) {
@@ -134,8 +135,9 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   // What depends on z alone (edges' lengths and directions, triples' and
-  // cells' strain gradients and slope factors, particles' contact terms): the
-  // first product of a linear solve keeps it, the others read it back, bit for
+  // cells' strain gradients and slope factors, particles' contact terms):
+  // kept by settled_cost and the diagonal after it (Newton's order), else by
+  // the first product of a linear solve; the others read it back, bit for
   // bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
   auto edge = [&](int64_t s, int64_t pos) {

@@ -195,6 +195,10 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   st.step = c_.step + 1;
   const double dt_start = c_.dt, first_step = cg_.first_step();
   save_unknowns();
+  // The ring's step-start forces, which its anchors read, from their owners:
+  // settled_cost computes the ring's forces itself, so after a migration a
+  // new ghost's would otherwise be stale.
+  halo_.exchange(c_.z.data(), Halo::kForces);
   halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
   ev_.interpolate_hanging(c_.x1.data());           // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();
