@@ -12,6 +12,22 @@ Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling&
   const size_t n = cloth.layout.size();
   for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) v->assign(n, 0.0);
   partials_.assign(2 * size_t(tiling.count()), 0.0);  // up to 2 sums at once
+  tile_c_.assign(size_t(tiling.count()) + 1, 0);
+}
+
+void Minimizer::number_unknowns(int64_t end) {
+  if (c_stamp_ == lists_.stamp && c_end_ == end && lists_.stamp != 0) return;
+  const IndexRuns& u = lists_.unknowns;
+  const size_t nt = lists_.tiles.size();
+  int64_t c = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    tile_c_[t] = c;
+    for (int64_t r = u.tile_begin[t]; r < u.tile_begin[t + 1] && u.bounds[2 * r] < end; ++r)
+      c += std::min(end, u.bounds[2 * r + 1]) - u.bounds[2 * r];
+  }
+  tile_c_[nt] = c;
+  c_stamp_ = lists_.stamp;
+  c_end_ = end;
 }
 
 double Minimizer::dot(const double* a, const double* b, int64_t end) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <type_traits>
 #include <vector>
 
 #include "solver/cost.hpp"
@@ -53,10 +54,26 @@ class Minimizer {
   // K such sums in one pass: f(k, acc) adds unknown k's terms to acc[0..K),
   // and may update vectors element-wise on the way (one pass over memory and
   // one parallel region instead of one per vector). Same tile order as dot.
+  // f(k, acc) or f(c, k, acc): c numbers the unknowns below `end` in tile
+  // order from 0 (compact vectors: consecutive in memory, however sparse the
+  // mesh).
   template <int K, class F>
   void tile_sums(int64_t end, F&& f, double* out);
+  // f(c, k) for the same unknowns and numbering, in the same static chunks.
+  template <class F>
+  void for_each_unknown(int64_t end, F&& f);
+  // How many unknowns lie below `end` (the compact vectors' length).
+  int64_t unknowns_below(int64_t end) {
+    number_unknowns(end);
+    return tile_c_[lists_.tiles.size()];
+  }
 
  private:
+  // Each tile's first compact number (tile_c_), for the lists' stamp and `end`.
+  void number_unknowns(int64_t end);
+  template <class F>
+  void tile_runs(int64_t end, F&& per_tile);
+
   CostTerms eval(Evaluator& ev, double* z, double* g, bool numeric);
 
   const Cloth& c_;
@@ -64,31 +81,63 @@ class Minimizer {
   const Tiling& tiling_;
   const Reducer& red_;
   std::vector<double> g_, gn_, s_, d_, zt_, diag_, partials_;
+  std::vector<int64_t> tile_c_;  // tiles + 1
+  uint64_t c_stamp_ = 0;
+  int64_t c_end_ = -1;
   double alpha_ = 1.0;  // first trial step, carried from one iteration to the next
 };
 
-template <int K, class F>
-void Minimizer::tile_sums(int64_t end, F&& f, double* out) {
-  static_assert(K >= 1 && K <= 2, "partials_ holds two sums per tile (Minimizer's constructor)");
+// per_tile(t, runs) for each owned tile, in static chunks; runs(run) calls
+// run(lo, hi, c) for each of the tile's runs [lo, hi) below `end`, c being
+// the compact number of lo.
+template <class F>
+void Minimizer::tile_runs(int64_t end, F&& per_tile) {
+  number_unknowns(end);
   const IndexRuns& u = lists_.unknowns;
-  const int64_t *tb = u.tile_begin.data(), *b = u.bounds.data();
+  const int64_t *tb = u.tile_begin.data(), *b = u.bounds.data(), *tc = tile_c_.data();
   const int nt = int(lists_.tiles.size());
   // Static: on a coarse mesh a tile holds a few unknowns, and handing out
   // hundreds of tiles one by one cost more than the products themselves.
   timed_region([&] {
 #pragma omp for schedule(static) nowait
-    for (int t = 0; t < nt; ++t) {
-      double acc[K] = {};
-      for (int64_t r = tb[t]; r < tb[t + 1] && b[2 * r] < end; ++r) {
-        // The run's bounds in locals: read in the loop's test, they kept GCC
-        // from vectorizing it (gathers, 10x slower at 257).
-        const int64_t lo = b[2 * r], hi = std::min(end, b[2 * r + 1]);
+    for (int t = 0; t < nt; ++t)
+      per_tile(t, [&](auto&& run) {
+        int64_t c = tc[t];
+        for (int64_t r = tb[t]; r < tb[t + 1] && b[2 * r] < end; ++r) {
+          // The run's bounds in locals: read in the loop's test, they kept
+          // GCC from vectorizing it (gathers, 10x slower at 257).
+          const int64_t lo = b[2 * r], hi = std::min(end, b[2 * r + 1]);
+          run(lo, hi, c);
+          c += hi - lo;
+        }
+      });
+  });
+}
+
+template <int K, class F>
+void Minimizer::tile_sums(int64_t end, F&& f, double* out) {
+  static_assert(K >= 1 && K <= 2, "partials_ holds two sums per tile (Minimizer's constructor)");
+  const int nt = int(lists_.tiles.size());
+  tile_runs(end, [&](int t, auto&& runs) {
+    double acc[K] = {};
+    runs([&](int64_t lo, int64_t hi, int64_t c) {
+      if constexpr (std::is_invocable_v<F&, int64_t, int64_t, double*>)
+        for (int64_t k = lo; k < hi; ++k) f(c + (k - lo), k, acc);
+      else
         for (int64_t k = lo; k < hi; ++k) f(k, acc);
-      }
-      for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
-    }
+    });
+    for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
   });
   red_.sum_tiles(lists_.tiles, partials_.data(), K, out);
+}
+
+template <class F>
+void Minimizer::for_each_unknown(int64_t end, F&& f) {
+  tile_runs(end, [&](int, auto&& runs) {
+    runs([&](int64_t lo, int64_t hi, int64_t c) {
+      for (int64_t k = lo; k < hi; ++k) f(c + (k - lo), k);
+    });
+  });
 }
 
 }  // namespace drape

@@ -6,20 +6,23 @@
 namespace drape {
 
 NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots) : c_(cloth), dots_(dots) {
-  const size_t n = cloth.layout.size();
-  for (auto* v : {&b_, &d_, &r_, &s_, &p_, &kp_, &diag_, &zt_}) v->assign(n, 0.0);
+  const size_t n = cloth.layout.size(), nx = size_t(cloth.layout.tension());
+  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &zt_}) v->assign(nx, 0.0);
+  for (auto* v : {&pg_, &kp_, &diag_}) v->assign(n, 0.0);
 }
 
-// Jacobi-preconditioned CG for K d = b (b_ holds the right-hand side). Every
-// vector lives on the free particles' positions (position_spans; dots up to
-// the tension block): the force slots are not Newton's unknowns, and on a
-// coarse mesh they are 5/8 of the entries.
+// Jacobi-preconditioned CG for K d = -rho. Its vectors are compact: the free
+// particles' positions numbered in tile order (Minimizer::tile_sums' c), so
+// that a coarse mesh's few unknowns lie together in memory instead of one
+// triple per cache line. Only the product's operand, its result and the
+// diagonal live at z's indices (pg_, kp_, diag_): the evaluator's kernels
+// read and write particles there.
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
-  double *b = b_.data(), *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(),
-         *kp = kp_.data(), *diag = diag_.data();
-  const IndexRuns& x = ev.lists().position_spans;
+  double *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(), *kpc = kpc_.data(),
+         *dc = dc_.data(), *pg = pg_.data(), *kp = kp_.data(), *diag = diag_.data();
+  const double* rho = ev.residual().data();
   const int64_t end = c_.layout.tension();
   {
     ScopedPhase ph(tm, kScaling);
@@ -28,14 +31,17 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-    double sums[2];  // b.b, r.s
-    dots_.tile_sums<2>(end, [&](int64_t k, double* acc) {
-      d[k] = 0;
-      r[k] = b[k];
-      s[k] = r[k] / diag[k];
-      p[k] = s[k];
-      acc[0] += b[k] * b[k];
-      acc[1] += r[k] * s[k];
+    double sums[2];  // b.b, r.s with b = -rho
+    dots_.tile_sums<2>(end, [&](int64_t c, int64_t k, double* acc) {
+      const double b = -rho[k];
+      dc[c] = diag[k];
+      d[c] = 0;
+      r[c] = b;
+      s[c] = r[c] / dc[c];
+      p[c] = s[c];
+      pg[k] = p[c];
+      acc[0] += b * b;
+      acc[1] += r[c] * s[c];
     }, sums);
     target = rel_tol * rel_tol * sums[0];
     rs = sums[1];
@@ -44,27 +50,34 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   while (it < budget) {
     {
       ScopedPhase g(tm, kGradient);  // one stiffness product: a gradient's worth of work
-      ev.stiffness_product(z, p, kp);
+      ev.stiffness_product(z, pg, kp);
     }
     ScopedPhase ph(tm, kVector);
-    const double pkp = dots_.dot(p, kp, end);
+    double pkp;
+    dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+      kpc[c] = kp[k];
+      acc[0] += p[c] * kpc[c];
+    }, &pkp);
     if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
     const double a = rs / pkp;
     // One pass: the step, the residual, the preconditioned residual and the
     // two dot products they feed (s is wasted on the last iteration only).
     double sums[2];  // r.r, r.s
-    dots_.tile_sums<2>(end, [&](int64_t k, double* acc) {
-      d[k] += a * p[k];
-      r[k] -= a * kp[k];
-      s[k] = r[k] / diag[k];
-      acc[0] += r[k] * r[k];
-      acc[1] += r[k] * s[k];
+    dots_.tile_sums<2>(end, [&](int64_t c, int64_t, double* acc) {
+      d[c] += a * p[c];
+      r[c] -= a * kpc[c];
+      s[c] = r[c] / dc[c];
+      acc[0] += r[c] * r[c];
+      acc[1] += r[c] * s[c];
     }, sums);
     ++it;
     if (sums[0] <= target) break;
     const double beta = sums[1] / rs;
     rs = sums[1];
-    for_each_listed(x, [&](int64_t k) { p[k] = s[k] + beta * p[k]; });
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) {
+      p[c] = s[c] + beta * p[c];
+      pg[k] = p[c];
+    });
   }
   return it;
 }
@@ -85,13 +98,9 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
       res.stopped = true;
       break;
     }
-    // Right-hand side: minus the Newton residual in F0 units, so the solution
-    // d of K d = -rho is the position step divided by F0.
-    const std::vector<double>& rho = ev.residual();
-    const ActiveList& free = ev.lists().particles;
-    parallel_for(free.size(), [&](int64_t k) {
-      for (int i = 0; i < 3; ++i) b_[3 * free.items[k] + i] = -rho[3 * free.items[k] + i];
-    });
+    // Right-hand side: minus the Newton residual in F0 units (linear_solve
+    // reads it from the evaluator), so the solution d of K d = -rho is the
+    // position step divided by F0.
     // Inexact Newton: a loose solve far from the solution, tighter near it.
     const double eta = std::clamp(std::sqrt(c0 * norm), 1e-3, 0.1);
     const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
@@ -103,10 +112,11 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // up to date and sets the element forces from the positions, so only the
     // free particles' positions are saved and restored (a whole-array copy
     // would cost the finest mesh's price on a coarse one).
-    for_each_listed(ev.lists().position_spans, [&](int64_t k) { zt[k] = z[k]; });
+    const int64_t end = c_.layout.tension();
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
-      for_each_listed(ev.lists().position_spans, [&](int64_t k) { z[k] = zt[k] + a * scale * d_[k]; });
+      dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c] + a * scale * d_[c]; });
       const CostTerms trial = ev.settled_cost(z);
       ++res.evaluations;
       if (std::isfinite(trial.total()) && trial.total() < c0) {
@@ -118,7 +128,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     }
     if (!accepted) {
       // Back to where the line search began; z's residual buffers with it.
-      for_each_listed(ev.lists().position_spans, [&](int64_t k) { z[k] = zt[k]; });
+      dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c]; });
       res.cost = ev.settled_cost(z);
       res.stalled = true;
       break;

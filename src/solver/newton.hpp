@@ -27,7 +27,11 @@ class NewtonSolver {
 
   const Cloth& c_;
   Minimizer& dots_;
-  std::vector<double> b_, d_, r_, s_, p_, kp_, diag_, zt_;
+  // Compact (Minimizer::for_each_unknown's c): the step, residual, scaled
+  // residual, direction, K p, diagonal and the positions before the trials.
+  std::vector<double> d_, r_, s_, p_, kpc_, dc_, zt_;
+  // At z's indices: the direction for the product, K p, the diagonal.
+  std::vector<double> pg_, kp_, diag_;
 };
 
 }  // namespace drape
