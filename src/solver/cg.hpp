@@ -59,6 +59,10 @@ class Minimizer {
   // mesh).
   template <int K, class F>
   void tile_sums(int64_t end, F&& f, double* out);
+  // The same sums for f(c, acc), which reads compact vectors only: a tile's
+  // numbers are consecutive, so its loop is one run however sparse the mesh.
+  template <int K, class F>
+  void compact_sums(int64_t end, F&& f, double* out);
   // f(c, k) for the same unknowns and numbering, in the same static chunks.
   template <class F>
   void for_each_unknown(int64_t end, F&& f);
@@ -127,6 +131,24 @@ void Minimizer::tile_sums(int64_t end, F&& f, double* out) {
         for (int64_t k = lo; k < hi; ++k) f(k, acc);
     });
     for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
+  });
+  red_.sum_tiles(lists_.tiles, partials_.data(), K, out);
+}
+
+template <int K, class F>
+void Minimizer::compact_sums(int64_t end, F&& f, double* out) {
+  static_assert(K >= 1 && K <= 2, "partials_ holds two sums per tile (Minimizer's constructor)");
+  number_unknowns(end);
+  const int64_t* tc = tile_c_.data();
+  const int nt = int(lists_.tiles.size());
+  timed_region([&] {
+#pragma omp for schedule(static) nowait
+    for (int t = 0; t < nt; ++t) {
+      double acc[K] = {};
+      const int64_t lo = tc[t], hi = tc[t + 1];
+      for (int64_t c = lo; c < hi; ++c) f(c, acc);
+      for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
+    }
   });
   red_.sum_tiles(lists_.tiles, partials_.data(), K, out);
 }

@@ -91,7 +91,10 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
   force[0] = force[1] = force[2] = 0;
   bool hit = false;
   const Obstacle& o = c.obstacle;
-  double n[3], hess[9];
+  double n[3], hess_at[9];
+  // The curvature term only enters -(dF/dx)^T r: the Newton passes, which do
+  // not ask for it, skip its nine divisions per particle.
+  double* hess = jac_t_r ? hess_at : nullptr;
   if (o.shape == ObstacleShape::Box) {
     const double d = box_distance(o, x, n, hess);
     hit |= add_surface(c, d, n, hess, force, r, jac_t_r, slope);

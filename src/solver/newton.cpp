@@ -63,7 +63,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     // One pass: the step, the residual, the preconditioned residual and the
     // two dot products they feed (s is wasted on the last iteration only).
     double sums[2];  // r.r, r.s
-    dots_.tile_sums<2>(end, [&](int64_t c, int64_t, double* acc) {
+    dots_.compact_sums<2>(end, [&](int64_t c, double* acc) {
       d[c] += a * p[c];
       r[c] -= a * kpc[c];
       s[c] = r[c] / dc[c];
