@@ -128,7 +128,7 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
-  if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
+  if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
   put(&buf_e_[kEdgeSlot * pos + 3], g[1], f * w);
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};

@@ -210,10 +210,11 @@ class Evaluator {
   bool kg_ready_ = false;
   bool settled_ = false;
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
-  // An edge's numbers into ke, from its ends' positions, its frozen tension,
-  // slope / rest length and width.
-  static void edge_kept(const double* za, const double* zb, double tension, double slope_per_rest, double width,
-                        double* ke);
+  // An edge's numbers into ke, from its ends' positions and length (as
+  // edge_length computes it: the cost pass hands over its own), its frozen
+  // tension, slope / rest length and width.
+  static void edge_kept(const double* za, const double* zb, double length, double tension, double slope_per_rest,
+                        double width, double* ke);
   // A triple's or cell's: the slope factor, then the n gradients.
   template <class V>
   static void kept_gradients(double factor, const V* g, int n, double* kg) {

@@ -106,13 +106,11 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a)
 // An edge's z-only numbers for stiffness_product, as edge_length on duals
 // computes their value parts: e = b - a, |e|, 1/|e| (e/|e| is one product
 // away); then its frozen tension, slope / rest length and width.
-void Evaluator::edge_kept(const double* za, const double* zb, double tension, double slope_per_rest, double width,
-                          double* ke) {
-  const V e = load3<double>(zb) - load3<double>(za);
-  const double Lv = std::sqrt(dot(e, e));
-  put(ke, e);
-  ke[3] = Lv;
-  ke[4] = 1.0 / Lv;
+void Evaluator::edge_kept(const double* za, const double* zb, double length, double tension, double slope_per_rest,
+                          double width, double* ke) {
+  put(ke, load3<double>(zb) - load3<double>(za));
+  ke[3] = length;
+  ke[4] = 1.0 / length;
   ke[5] = tension;
   ke[6] = slope_per_rest;
   ke[7] = width;
@@ -144,7 +142,11 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const int64_t p = s >> 1, q = nb_e_[pos];
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
-    if (fill) edge_kept(z + 3 * p, z + 3 * q, k_tension_[s], k_slope_[s] / c_.edge_rest[s], c_.edge_width[s], ke);
+    if (fill) {
+      const V e = at(z, q) - at(z, p);
+      edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[s], k_slope_[s] / c_.edge_rest[s],
+                c_.edge_width[s], ke);
+    }
     // edge_length on duals at (z, v), its eps parts written out in the same
     // operations, with the value parts kept: bit for bit its numbers.
     const V e = load3<double>(ke), ed = at(v, q) - at(v, p);
