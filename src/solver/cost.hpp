@@ -113,7 +113,11 @@ class Evaluator {
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   CostTerms cost_pass(double* z, double* settle);
-  void settled_diagonal(const double* z, double* diag);
+  // An element's stiffness numbers at z (edge_kept's, kept_gradients'),
+  // its band stop computed here; its frozen tension and slope recorded.
+  void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
+  void triple_numbers(int64_t s, int64_t pos, const double* z, double* kg);
+  void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void particle_residual(int64_t p, const GatherRow& row, const double* z);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void triple_gradient(int64_t s, int64_t pos, const double* z, double* grad);

@@ -233,12 +233,54 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   kg_ready_ = true;
 }
 
-// stiffness_diagonal from the numbers settled_cost kept at z (the same
-// operations on the same values as below); the particles' contact numbers
-// are kept on the way, so that no product computes anything but itself.
-void Evaluator::settled_diagonal(const double* z, double* diag) {
-  auto edge = [&](int64_t, int64_t pos) {
-    const double* ke = &kg_e_[kKgEdge * pos];
+void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z, double* ke) {
+  const int64_t p = s >> 1, q = nb_e_[pos];
+  V g[2];
+  const double len = edge_length(at(z, p), at(z, q), g);
+  const double L0 = c_.edge_rest[s];
+  const Band::Stop st = m_.stretch[s & 1].stop(c_.anchor[s], len / L0 - 1);
+  k_tension_[s] = std::max(0.0, st.f);
+  k_slope_[s] = st.df_dq;
+  edge_kept(z + 3 * p, z + 3 * q, len, k_tension_[s], st.df_dq / L0, c_.edge_width[s], ke);
+}
+
+void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
+  const int64_t k = c_.layout.moment() - c_.layout.tension() + s;
+  int64_t ids[3];
+  triple_ids(s, pos, ids);
+  V g[3];
+  const double th =
+      bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
+  const double Lm = c_.triple_rest[s];
+  k_slope_[k] = m_.bend[s & 1].stop(c_.anchor[k], th / Lm).df_dq;
+  kept_gradients(c_.triple_width[s] * k_slope_[k] / Lm, g, 3, kg);
+}
+
+void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
+  const int64_t k = c_.layout.shear() - c_.layout.tension() + s;
+  int64_t ids[4];
+  cell_ids(s, pos, ids);
+  const CellAt a = cell_at(ids, z);
+  V g[4];
+  const double phi = shear_cell(a.x, g);
+  k_slope_[k] = m_.shear.stop(c_.anchor[k], phi).df_dq;
+  kept_gradients(c_.shear_area[s] * k_slope_[k], g, 4, kg);
+}
+
+// The diagonal of K: per element and particle, its stiffness block's
+// diagonal, in the first entry of the particle's buffer entry, gathered.
+// The elements' numbers are those settled_cost kept when it ran at this z
+// (Newton's order: their strains, bands and angles are not computed a third
+// time), else computed here; either way they and the particles' contact
+// numbers stay kept (keep_products), so that no product computes anything
+// but itself.
+void Evaluator::stiffness_diagonal(const double* z, double* diag) {
+  list_rows();
+  const bool settled = settled_;
+  auto edge = [&](int64_t s, int64_t pos) {
+    double mine[kKgEdge];
+    double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
+    if (!settled) edge_numbers(s, pos, z, ke);
     const V u = ke[4] * load3<double>(ke);  // dk/dx = -u, u: the same |.|^2
     const double d = ke[7] * (ke[5] / ke[3] + ke[6] * dot(u, u) / 3);
     buf_e_[kEdgeSlot * pos] = buf_e_[kEdgeSlot * pos + 3] = d;
@@ -249,87 +291,39 @@ void Evaluator::settled_diagonal(const double* z, double* diag) {
       buf[3 * k] = kg[0] * dot(g, g) / 3;
     }
   };
-  auto triple = [&](int64_t, int64_t pos) { gradients(&kg_t_[kKgTriple * pos], &buf_t_[kTripleSlot * pos], 3); };
-  auto shear = [&](int64_t, int64_t pos) { gradients(&kg_s_[kKgCell * pos], &buf_s_[kShearSlot * pos], 4); };
-  auto particle = [&](int64_t p, int64_t pos) {
-    double* kc = &kc_[kKc * pos];
+  auto triple = [&](int64_t s, int64_t pos) {
+    double mine[kKgTriple];
+    double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
+    if (!settled) triple_numbers(s, pos, z, kg);
+    gradients(kg, &buf_t_[kTripleSlot * pos], 3);
+  };
+  auto shear = [&](int64_t s, int64_t pos) {
+    double mine[kKgCell];
+    double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
+    if (!settled) shear_numbers(s, pos, z, kg);
+    gradients(kg, &buf_s_[kShearSlot * pos], 4);
+  };
+  auto contact_at = [&](int64_t p, size_t row, double* mine) -> const double* {
+    double* kc = keep_ ? &kc_[kKc * row] : mine;
     contact_kept(p, z, kc);
+    return kc;
+  };
+  auto particle = [&](int64_t p, int64_t pos) {
+    double mine[kKc];
+    const double* kc = contact_at(p, size_t(pos), mine);
     double dsum = kc[5] + kc[4] / 3;
     gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* out) {
-    double* kc = &kc_[kKc * size_t(&row - rows_.data())];
-    contact_kept(h, z, kc);
+    double mine[kKc];
+    const double* kc = contact_at(h, size_t(&row - rows_.data()), mine);
     double dsum = kc[4] / 3;
     gather_listed(row, [&](const double* c) { dsum += c[0]; });
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);
-  kg_ready_ = true;
-}
-
-void Evaluator::stiffness_diagonal(const double* z, double* diag) {
-  list_rows();
-  if (settled_) {
-    settled_diagonal(z, diag);
-    return;
-  }
-  kg_ready_ = false;  // a new z: stiffness_product computes its gradients again
-  const Layout& L = c_.layout;
-  const int64_t fo = L.tension();
-  // Per element and particle: the diagonal of its stiffness block, in the
-  // first entry of the particle's buffer entry, gathered below.
-  auto edge = [&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1;
-    const int d = int(s & 1);
-    V g[2];
-    const double len = edge_length(at(z, p), at(z, nb_e_[pos]), g);
-    const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
-    const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], len / L0 - 1);
-    k_tension_[s] = std::max(0.0, st.f);
-    k_slope_[s] = st.df_dq;
-    for (int k = 0; k < 2; ++k)
-      buf_e_[kEdgeSlot * pos + 3 * k] = w * (std::max(0.0, st.f) / len + st.df_dq / L0 * dot(g[k], g[k]) / 3);
-  };
-  auto triple = [&](int64_t s, int64_t pos) {
-    const int d = int(s & 1);
-    int64_t ids[3];
-    triple_ids(s, pos, ids);
-    V g[3];
-    const double th =
-        bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
-    const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
-    const double slope = m_.bend[d].stop(c_.anchor[L.moment() - fo + s], th / Lm).df_dq;
-    k_slope_[L.moment() - fo + s] = slope;
-    for (int k = 0; k < 3; ++k) buf_t_[kTripleSlot * pos + 3 * k] = w * slope / Lm * dot(g[k], g[k]) / 3;
-  };
-  auto shear = [&](int64_t s, int64_t pos) {
-    int64_t ids[4];
-    cell_ids(s, pos, ids);
-    const CellAt a = cell_at(ids, z);
-    V g[4];
-    const double phi = shear_cell(a.x, g);
-    const double slope = m_.shear.stop(c_.anchor[L.shear() - fo + s], phi).df_dq;
-    k_slope_[L.shear() - fo + s] = slope;
-    for (int k = 0; k < 4; ++k) buf_s_[kShearSlot * pos + 3 * k] = c_.shear_area[s] * slope * dot(g[k], g[k]) / 3;
-  };
-  const double ca = m_.inertia_coeff();
-  auto particle = [&](int64_t p, int64_t pos) {
-    double fc[3], slope = 0;
-    contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
-    double dsum = c_.mass[p] * ca + slope / 3;
-    gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
-    for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
-  };
-  elements_then_particles(edge, triple, shear, [] {}, particle);
-  hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* out) {
-    double fc[3], slope = 0;
-    contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
-    double dsum = slope / 3;
-    gather_listed(row, [&](const double* c) { dsum += c[0]; });
-    out[0] = out[1] = out[2] = dsum;
-  }, 2.0, 1.0);
+  kg_ready_ = keep_;
 }
 
 }  // namespace drape
