@@ -1,7 +1,9 @@
 // Issue 2's figures: time per gradient evaluation and per CG iteration at
 // 1000 x 1000 on one rank, and the finite-difference / analytic gradient time
 // ratio on 100 x 100, both gradients timed in the same run. Issue 3's: the
-// cost per active particle of an AMRC mesh against the finest mesh's (257).
+// cost per active particle of an AMRC mesh against the finest mesh's (257),
+// and what parts of a Newton step cost on either (one layout or pass
+// against another, in the same run).
 //   build/bench/bench_gradient --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -11,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <string>
 
 #include "mid_drape.hpp"
 
@@ -210,6 +213,78 @@ void BM_NewtonStepOverhead(benchmark::State& state) {
   state.counters["amrc_settled_over_separate"] = seconds[1][1] / seconds[1][0];
 }
 BENCHMARK(BM_NewtonStepOverhead)->Arg(257)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// One linear-CG iteration's vector passes (NewtonSolver::linear_solve: p.Kp,
+// the fused step / residual pass, the direction update) per unknown, on the
+// finest and an AMRC mesh, with the vectors compact (the solver's layout:
+// unknowns numbered in tile order) and at z's indices (its layout before
+// session 21), back to back in each repetition over the same lists.
+void BM_LinearSolveVectors(benchmark::State& state) {
+  const int n = int(state.range(0));
+  static std::map<int, std::unique_ptr<Bed>[2]> made;
+  if (!made.count(n)) made[n][0] = std::make_unique<Bed>(n), made[n][1] = std::make_unique<Bed>(n, true);
+  Bed* beds[2] = {made[n][0].get(), made[n][1].get()};
+  double seconds[2][2] = {}, unknowns[2] = {};  // [mesh][compact]
+  const int per = 20;
+  for (auto _ : state)
+    for (int b = 0; b < 2; ++b) {
+      Minimizer& m = beds[b]->loop->minimizer();
+      const int64_t end = beds[b]->cloth.layout.tension();
+      const size_t nz = beds[b]->cloth.z.size(), nc = size_t(m.unknowns_below(end));
+      unknowns[b] = double(nc);
+      state.PauseTiming();
+      std::vector<double> g[6], c[6];  // d, r, s, p, Kp, diag
+      for (int k = 0; k < 6; ++k) g[k].assign(nz, k == 5 ? 2.0 : 1e-3), c[k].assign(nc, k == 5 ? 2.0 : 1e-3);
+      state.ResumeTiming();
+      double *d = g[0].data(), *r = g[1].data(), *s = g[2].data(), *p = g[3].data(), *kp = g[4].data(),
+             *dg = g[5].data();
+      double *dc = c[0].data(), *rc = c[1].data(), *sc = c[2].data(), *pc = c[3].data(), *kpc = c[4].data(),
+             *diag = c[5].data();
+      double pg_sum = 0, sums[2];
+      const double a = 1e-9, beta = 0.5;
+      seconds[b][0] += cpu_seconds_of([&] {
+        for (int it = 0; it < per; ++it) {
+          m.tile_sums<1>(end, [&](int64_t k, double* acc) { acc[0] += p[k] * kp[k]; }, &pg_sum);
+          m.tile_sums<2>(end, [&](int64_t k, double* acc) {
+            d[k] += a * p[k];
+            r[k] -= a * kp[k];
+            s[k] = r[k] / dg[k];
+            acc[0] += r[k] * r[k];
+            acc[1] += r[k] * s[k];
+          }, sums);
+          m.for_each_unknown(end, [&](int64_t, int64_t k) { p[k] = s[k] + beta * p[k]; });
+        }
+      });
+      seconds[b][1] += cpu_seconds_of([&] {
+        for (int it = 0; it < per; ++it) {
+          m.tile_sums<1>(end, [&](int64_t i, int64_t k, double* acc) {
+            kpc[i] = kp[k];
+            acc[0] += pc[i] * kpc[i];
+          }, &pg_sum);
+          m.compact_sums<2>(end, [&](int64_t i, double* acc) {
+            dc[i] += a * pc[i];
+            rc[i] -= a * kpc[i];
+            sc[i] = rc[i] / diag[i];
+            acc[0] += rc[i] * rc[i];
+            acc[1] += rc[i] * sc[i];
+          }, sums);
+          m.for_each_unknown(end, [&](int64_t i, int64_t k) {
+            pc[i] = sc[i] + beta * pc[i];
+            p[k] = pc[i];
+          });
+        }
+      });
+      benchmark::DoNotOptimize(sums);
+    }
+  const double reps = double(state.iterations()) * per;
+  state.counters["share"] = unknowns[1] / unknowns[0];
+  for (int b = 0; b < 2; ++b) {
+    const char* mesh = b ? "amrc" : "fine";
+    state.counters[std::string(mesh) + "_grid_ns"] = 1e9 * seconds[b][0] / reps / unknowns[b];
+    state.counters[std::string(mesh) + "_compact_over_grid"] = seconds[b][1] / seconds[b][0];
+  }
+}
+BENCHMARK(BM_LinearSolveVectors)->Arg(257)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Both gradients timed back to back in each repetition: the ratio is a
 // measurement of one run, not of two runs on a shared machine.
