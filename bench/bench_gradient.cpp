@@ -67,8 +67,8 @@ void BM_StiffnessProduct(benchmark::State& state) {
   std::vector<double> v(bed.cloth.z.size(), 1e-6), kv(bed.cloth.z.size()), diag(bed.cloth.z.size());
   bed.loop->evaluator().hysteresis_forces(bed.cloth.z.data());
   bed.loop->evaluator().stiffness_diagonal(bed.cloth.z.data(), diag.data());  // freezes the band slopes
-  // The first product at a z keeps its z-only numbers; the others, which
-  // this times, read them (one Newton linear solve: a first, then dozens).
+  // The diagonal keeps the z-only numbers; the products, which this times,
+  // read them (one Newton linear solve: a diagonal, then dozens).
   bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
   for (auto _ : state) {
     bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
@@ -175,9 +175,9 @@ BENCHMARK(BM_AmrcPerParticle)->Arg(129)->Arg(257)->Unit(benchmark::kMillisecond)
 // trial (forces set to their hysteresis targets, the cost), then K's diagonal
 // and the linear solve's first product at the accepted z. Timed both ways
 // back to back in each repetition, on the finest and an AMRC mesh: the
-// separate passes (hysteresis_forces, evaluate, a diagonal and a first
-// product that compute the elements' geometry again) and settled_cost,
-// whose numbers the diagonal and product read. The same numbers, bit for bit
+// separate passes (hysteresis_forces, evaluate, and a diagonal that
+// computes the elements' geometry again) and settled_cost, whose numbers
+// the diagonal and product read. The same numbers, bit for bit
 // (tests: Stiffness.SettledCostIsHysteresisForcesThenEvaluate).
 void BM_NewtonStepOverhead(benchmark::State& state) {
   const int n = int(state.range(0));
@@ -237,9 +237,9 @@ void BM_LinearSolveVectors(benchmark::State& state) {
       for (int k = 0; k < 6; ++k) g[k].assign(nz, k == 5 ? 2.0 : 1e-3), c[k].assign(nc, k == 5 ? 2.0 : 1e-3);
       state.ResumeTiming();
       double *d = g[0].data(), *r = g[1].data(), *s = g[2].data(), *p = g[3].data(), *kp = g[4].data(),
-             *dg = g[5].data();
-      double *dc = c[0].data(), *rc = c[1].data(), *sc = c[2].data(), *pc = c[3].data(), *kpc = c[4].data(),
-             *diag = c[5].data();
+             *diag = g[5].data();
+      double *dn = c[0].data(), *rn = c[1].data(), *sn = c[2].data(), *pn = c[3].data(), *kpn = c[4].data(),
+             *diagn = c[5].data();
       double pg_sum = 0, sums[2];
       const double a = 1e-9, beta = 0.5;
       seconds[b][0] += cpu_seconds_of([&] {
@@ -248,7 +248,7 @@ void BM_LinearSolveVectors(benchmark::State& state) {
           m.tile_sums<2>(end, [&](int64_t k, double* acc) {
             d[k] += a * p[k];
             r[k] -= a * kp[k];
-            s[k] = r[k] / dg[k];
+            s[k] = r[k] / diag[k];
             acc[0] += r[k] * r[k];
             acc[1] += r[k] * s[k];
           }, sums);
@@ -258,19 +258,19 @@ void BM_LinearSolveVectors(benchmark::State& state) {
       seconds[b][1] += cpu_seconds_of([&] {
         for (int it = 0; it < per; ++it) {
           m.tile_sums<1>(end, [&](int64_t i, int64_t k, double* acc) {
-            kpc[i] = kp[k];
-            acc[0] += pc[i] * kpc[i];
+            kpn[i] = kp[k];
+            acc[0] += pn[i] * kpn[i];
           }, &pg_sum);
           m.compact_sums<2>(end, [&](int64_t i, double* acc) {
-            dc[i] += a * pc[i];
-            rc[i] -= a * kpc[i];
-            sc[i] = rc[i] / diag[i];
-            acc[0] += rc[i] * rc[i];
-            acc[1] += rc[i] * sc[i];
+            dn[i] += a * pn[i];
+            rn[i] -= a * kpn[i];
+            sn[i] = rn[i] / diagn[i];
+            acc[0] += rn[i] * rn[i];
+            acc[1] += rn[i] * sn[i];
           }, sums);
           m.for_each_unknown(end, [&](int64_t i, int64_t k) {
-            pc[i] = sc[i] + beta * pc[i];
-            p[k] = pc[i];
+            pn[i] = sn[i] + beta * pn[i];
+            p[k] = pn[i];
           });
         }
       });

@@ -5,7 +5,10 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstring>
+#include <string>
 
 #include "amrc/criterion.hpp"
 #include "solver/checksum.hpp"
@@ -102,11 +105,14 @@ TEST(ActiveLists, EveryItemProcessedExactlyOnce) {
   }
 }
 
-// Newton's vectors run over position_spans: exactly the free particles'
-// positions, in ascending order, and the whole of unknown_spans below the
-// tension block; on a plain mesh and on an AMRC mesh with coarse leaves,
-// hanging particles and a clamped corner.
-TEST(ActiveLists, PositionSpansAreTheFreeParticlesPositions) {
+// Newton's compact vectors (Minimizer: unknowns below the tension block
+// numbered in tile order): for_each_unknown numbers exactly the free
+// particles' positions, 0 .. unknowns_below - 1 once each; tile_sums hands
+// its body the same numbers; compact_sums over a compact vector is bit for
+// bit tile_sums over the same values at z's indices; and the numbering
+// follows a rebuild of the lists. On a plain mesh and on an AMRC mesh with
+// coarse leaves, hanging particles and a clamped corner.
+TEST(ActiveLists, CompactNumbersAreTheFreeParticlesPositions) {
   for (bool amrc : {false, true}) {
     Scene s;
     s.cloth.particles = {23, 19};
@@ -122,20 +128,51 @@ TEST(ActiveLists, PositionSpansAreTheFreeParticlesPositions) {
     }
     w.cloth.flags[0] |= kFixed;
     w.rebuild();
+    Minimizer& m = w.loop->minimizer();
     const int64_t end = w.cloth.layout.tension();
-    std::vector<int64_t> want, got, below;
-    for (int64_t p : w.lists.particles.items)
-      for (int a = 0; a < 3; ++a) want.push_back(3 * p + a);
-    std::sort(want.begin(), want.end());
-    const IndexRuns& x = w.lists.position_spans;
-    for (int64_t r = 0; r < x.count(); ++r)
-      for (int64_t k = x.bounds[2 * r]; k < x.bounds[2 * r + 1]; ++k) got.push_back(k);
-    const IndexRuns& u = w.lists.unknown_spans;
-    for (int64_t r = 0; r < u.count(); ++r)
-      for (int64_t k = u.bounds[2 * r]; k < std::min(end, u.bounds[2 * r + 1]); ++k) below.push_back(k);
-    ASSERT_LT(want.size(), 3 * size_t(w.cloth.grid.n()) - (amrc ? 100 : 2)) << "some particles are not free";
-    EXPECT_EQ(got, want) << (amrc ? "AMRC mesh" : "plain mesh");
-    EXPECT_EQ(below, want) << (amrc ? "AMRC mesh" : "plain mesh");
+    for (int64_t fixed : {int64_t(0), int64_t(23 * 19 - 1)}) {
+      const std::string where = std::string(amrc ? "AMRC mesh" : "plain mesh") + ", fixed " + std::to_string(fixed);
+      if (fixed > 0) {  // the same minimizer after its lists are built again (a new stamp)
+        m.unknowns_below(end);
+        w.cloth.flags[fixed] |= kFixed;
+        std::vector<int> owned;
+        for (int t = 0; t < w.tiling.count(); ++t) owned.push_back(t);
+        build_active_lists(w.cloth, w.tiling, owned, w.lists);
+        if (w.tree) hanging_links(*w.tree, w.lists.hanging);
+      }
+      std::vector<int64_t> want;
+      for (int64_t p : w.lists.particles.items)
+        for (int a = 0; a < 3; ++a) want.push_back(3 * p + a);
+      std::sort(want.begin(), want.end());
+      ASSERT_LT(want.size(), 3 * size_t(w.cloth.grid.n()) - (amrc ? 100 : 2)) << "some particles are not free";
+      const int64_t n = m.unknowns_below(end);
+      ASSERT_EQ(n, int64_t(want.size())) << where;
+      std::vector<int64_t> at(n, -1), again(n, -1);
+      std::vector<int> hits(n, 0);
+      std::atomic<int> outside{0};  // no assertions inside the parallel loop
+      m.for_each_unknown(end, [&](int64_t c, int64_t k) {
+        if (c < 0 || c >= n) {
+          ++outside;
+          return;
+        }
+        at[c] = k;
+        ++hits[c];
+      });
+      ASSERT_EQ(outside.load(), 0) << where << ": numbers outside 0 .. " << n - 1;
+      EXPECT_EQ(hits, std::vector<int>(n, 1)) << where;
+      std::vector<int64_t> got = at;
+      std::sort(got.begin(), got.end());
+      EXPECT_EQ(got, want) << where;
+      double unused;
+      m.tile_sums<1>(end, [&](int64_t c, int64_t k, double*) { again[c] = k; }, &unused);
+      EXPECT_EQ(again, at) << where << ": tile_sums numbers the unknowns otherwise";
+      std::vector<double> compact(n), spread(w.cloth.z.size(), 0.0);
+      for (int64_t c = 0; c < n; ++c) spread[at[c]] = compact[c] = std::sin(1.0 + double(c)) * (1 + c % 7);
+      double a, b;
+      m.tile_sums<1>(end, [&](int64_t k, double* acc) { acc[0] += spread[k] * spread[k]; }, &a);
+      m.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += compact[c] * compact[c]; }, &b);
+      EXPECT_EQ(a, b) << where;
+    }
   }
 }
 

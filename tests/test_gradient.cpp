@@ -248,11 +248,11 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
   }
 }
 
-// stiffness_product keeps the triples' and cells' gradients from its first
-// call at a z (stiffness_diagonal starts over): a product read back from
-// them is bit for bit the one that computed them (and one that keeps
-// nothing), and after z moves the products follow it (an evaluator that
-// never saw the old z agrees exactly).
+// stiffness_diagonal keeps the elements' z-only numbers (gradients, slope
+// factors) at its z for the products: a product read back from them is bit
+// for bit one that keeps nothing and computes them itself, twice in a row,
+// and after z moves the products follow it (an evaluator that never saw the
+// old z agrees exactly).
 TEST(Stiffness, KeptGradientsFollowZ) {
   for (bool amrc : {false, true}) {
     World w = random_world(12, amrc), fresh = random_world(12, amrc);

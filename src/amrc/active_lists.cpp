@@ -73,16 +73,6 @@ void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>
   runs.tile_begin[owned.size()] = runs.count();
 }
 
-// The spans' entries below `end`: spans ascend, so a prefix, the last one cut.
-void clip_spans(const IndexRuns& spans, int64_t end, IndexRuns& out) {
-  out.bounds.clear();
-  out.tile_begin.clear();
-  for (int64_t r = 0; r < spans.count() && spans.bounds[2 * r] < end; ++r) {
-    out.bounds.push_back(spans.bounds[2 * r]);
-    out.bounds.push_back(std::min(end, spans.bounds[2 * r + 1]));
-  }
-}
-
 void build_spans(const IndexRuns& runs, IndexRuns& spans) {
   const int64_t nr = runs.count();
   std::vector<int64_t>& s = spans.bounds;
@@ -175,7 +165,6 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
   build_one(tiling, owned, 1, shear, out.shears);
   build_unknowns(c, tiling, owned, out.unknowns);
   build_spans(out.unknowns, out.unknown_spans);
-  clip_spans(out.unknown_spans, c.layout.tension(), out.position_spans);
   build_ring(ring, 2, edge, out.ring_edges);
   build_ring(ring, 2, triple, out.ring_triples);
   build_ring(ring, 1, shear, out.ring_shears);

@@ -70,8 +70,6 @@ struct ActiveLists {
   // The same entries in ascending order, adjacent runs merged and cut into
   // pieces of at most 4096: vector updates stream through z (no tiles).
   IndexRuns unknown_spans;
-  // Their prefix in the position block: Newton's vectors live there only.
-  IndexRuns position_spans;
   // Elements of the ghost ring (other ranks' tiles, one particle around this
   // rank's): computed here too, because this rank's particles gather their
   // contributions; their cost belongs to their owner. One run, no tiles.

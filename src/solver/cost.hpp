@@ -76,7 +76,8 @@ class Evaluator {
   // contact normal term (the indefinite bending/shear geometric terms are
   // left out so that K stays positive definite). Written at the free
   // particles' positions (hanging ones': 0) only, the entries Newton's
-  // vectors live on (ActiveLists::position_spans).
+  // vectors stand for (Minimizer::for_each_unknown numbers them; the linear
+  // solve copies them into its compact vectors).
   // Needs stiffness_diagonal at the same z and lists first (Newton's linear
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
@@ -90,7 +91,9 @@ class Evaluator {
   // product evaluates no band, power law or angle: those cost more than the
   // product's own arithmetic, once per product. Right after settled_cost at
   // the same z (Newton's order), it reads that pass's numbers: the same
-  // diagonal, bit for bit, without the elements' geometry.
+  // diagonal, bit for bit, without the elements' geometry; else it computes
+  // them. Either way, keeping products, it leaves every number the products
+  // read kept (the particles' contact ones too).
   void stiffness_diagonal(const double* z, double* diag);
 
   // Per-slot bending cost of the last evaluate() (the AMRC criterion).
@@ -203,8 +206,9 @@ class Evaluator {
   // list position, the particles' by row (rows_): edges (edge_kept), triples
   // and cells (slope factor, then the gradient, 3 or 4 x 3), contact (force,
   // size, slope) and mass coefficient. Kept by settled_cost (elements) and
-  // the diagonal after it (particles), or else by the first product after
-  // a diagonal; kg_ready_ while they are all the linear solve's z's.
+  // the diagonal after it (particles), or all by a diagonal at a z no
+  // settled_cost saw (or, after a list change, by the next product);
+  // kg_ready_ while they are all the linear solve's z's.
   static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 6;
   // settled_cost keeps the elements' numbers (settled_, until another
   // evaluation, new anchors or a list change): they are its band stops and gradients, so

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace drape {
 
@@ -93,6 +94,8 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   res.evaluations = 1;
   double c0 = res.cost.total();
   double* zt = zt_.data();  // the free particles' positions before the line search's trials
+  if (dots_.unknowns_below(c_.layout.tension()) > int64_t(zt_.size()))  // 3 per owned particle at most
+    throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;

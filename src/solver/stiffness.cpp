@@ -134,9 +134,9 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   const int64_t fo = L.tension();
   // What depends on z alone (edges' lengths and directions, triples' and
   // cells' strain gradients and slope factors, particles' contact terms):
-  // kept by settled_cost and the diagonal after it (Newton's order), else by
-  // the first product of a linear solve; the others read it back, bit for
-  // bit the same numbers. Not keeping, every product computes it.
+  // kept by the diagonal (from settled_cost's pass in Newton's order), or
+  // by a first product after a list change; the products read it back, bit
+  // for bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
   auto edge = [&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1, q = nb_e_[pos];
