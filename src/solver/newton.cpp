@@ -94,28 +94,26 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   res.evaluations = 1;
   double c0 = res.cost.total();
   double* zt = zt_.data();  // the free particles' positions before the line search's trials
-  if (dots_.unknowns_below(c_.layout.tension()) > int64_t(zt_.size()))  // 3 per owned particle at most
+  const int64_t end = c_.layout.tension();  // the positions: Newton's unknowns
+  if (dots_.unknowns_below(end) > int64_t(zt_.size()))  // 3 per owned particle at most
     throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;
       break;
     }
-    // Right-hand side: minus the Newton residual in F0 units (linear_solve
-    // reads it from the evaluator), so the solution d of K d = -rho is the
-    // position step divided by F0.
     // Inexact Newton: a loose solve far from the solution, tighter near it.
     const double eta = std::clamp(std::sqrt(c0 * norm), 1e-3, 0.1);
     const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
     res.iterations += std::max(1, used);
-    // d_ solves K d = -rho (F0 units): the position step is d * F0.
+    // d_ solves K d = -rho, rho the evaluator's residual in F0 units: the
+    // position step is d * F0.
     const double scale = ev.force_scale();
     bool accepted = false;
     // Trials in place: each evaluation brings z's ghosts and hanging particles
     // up to date and sets the element forces from the positions, so only the
     // free particles' positions are saved and restored (a whole-array copy
     // would cost the finest mesh's price on a coarse one).
-    const int64_t end = c_.layout.tension();
     dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
     for (double a = 1.0; a > 1e-4; a *= 0.5) {
       ScopedPhase ph(tm, kLineSearch);
