@@ -134,9 +134,9 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
-  cost_e_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_e_[s] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / L0;
-  gf_e_[s] = (sigma + m_.memory * mem) * lam;
+  cost_e_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
+  gq_e_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / L0;
+  gf_e_[pos] = (sigma + m_.memory * mem) * lam;
 }
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
@@ -155,9 +155,9 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* s
   const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
-  cost_t_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_t_[s] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / Lm;
-  gf_t_[s] = (sigma + m_.memory * mem) * lam;
+  cost_t_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
+  gq_t_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / Lm;
+  gf_t_[pos] = (sigma + m_.memory * mem) * lam;
 }
 
 void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* settle) {
@@ -175,9 +175,9 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
-  cost_s_[s] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_s_[s] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam;
-  gf_s_[s] = (sigma + m_.memory * mem) * lam;
+  cost_s_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
+  gq_s_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam;
+  gf_s_[pos] = (sigma + m_.memory * mem) * lam;
 }
 
 // ---- pass 2: Newton residual per free particle ---------------------------
@@ -234,10 +234,10 @@ void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* g
   // Hessian of the length times (rb - ra): (v - u (u.v)) / L.
   const V v = rb - ra;
   const V hv = (1.0 / L) * (v - dot(g[1], v) * g[1]);
-  const double fw = f * w / m_.force_scale, gq = gq_e_[s];
+  const double fw = f * w / m_.force_scale, gq = gq_e_[pos];
   put(&buf_e_[kEdgeSlot * pos], (-fw) * hv + gq * g[0], 1.0);
   put(&buf_e_[kEdgeSlot * pos + 3], fw * hv + gq * g[1], 1.0);
-  grad[c_.layout.tension() + s] = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[s];
+  grad[c_.layout.tension() + s] = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[pos];
 }
 
 void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
@@ -254,14 +254,14 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   V3<Dual> gd[3];
   drape::bend_gradient(xd[0], xd[1], xd[2], n, gd);
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
-  const double fw = f * w / m_.force_scale, gq = gq_t_[s];
+  const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
   for (int k = 0; k < 3; ++k) {
     const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
     put(&buf_t_[kTripleSlot * pos + 3 * k], fw * hr + gq * g, 1.0);
     gr += dot(g, r[k]);
   }
-  grad[c_.layout.moment() + s] = w * gr / m_.force_scale + gf_t_[s];
+  grad[c_.layout.moment() + s] = w * gr / m_.force_scale + gf_t_[pos];
 }
 
 void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
@@ -277,14 +277,14 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   V3<Dual> gd[4];
   shear_cell<Dual, false>(xd, gd);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
-  const double fa = f * A / m_.force_scale, gq = gq_s_[s];
+  const double fa = f * A / m_.force_scale, gq = gq_s_[pos];
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
     const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
     put(&buf_s_[kShearSlot * pos + 3 * k], fa * hr + gq * g, 1.0);
     gr += dot(g, r[k]);
   }
-  grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[s];
+  grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[pos];
 }
 
 // ---- pass 4: gather per free particle ------------------------------------
@@ -312,9 +312,11 @@ CostTerms Evaluator::reduce_costs() {
   const size_t nt = lists_.tiles.size();
   double* out = partials_.data();
   tile_sums(lists_.particles, [&](int64_t p) { return cost_p_[p]; }, out);
-  tile_sums(lists_.edges, [&](int64_t s) { return cost_e_[s]; }, out + nt);
-  tile_sums(lists_.triples, [&](int64_t s) { return cost_t_[s]; }, out + 2 * nt);
-  tile_sums(lists_.shears, [&](int64_t s) { return cost_s_[s]; }, out + 3 * nt);
+  // Element costs sit in list order: an owned element's position is its
+  // place in its list.
+  tile_sums(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
+  tile_sums(lists_.triples, [&](int64_t, int64_t k) { return cost_t_[k]; }, out + 2 * nt);
+  tile_sums(lists_.shears, [&](int64_t, int64_t k) { return cost_s_[k]; }, out + 3 * nt);
   double sums[4];
   red_.sum_tiles(lists_.tiles, out, 4, sums);
   return {sums[0], sums[1], sums[2], sums[3]};
@@ -538,10 +540,10 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
         sum += cost_p_[p];
       }
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) sum += cost_e_[2 * p + d];
-        if (c_.triple_on[2 * p + d]) sum += cost_t_[2 * p + d];
+        if (c_.edge_on[2 * p + d]) sum += cost_e_[at_e_[2 * p + d]];
+        if (c_.triple_on[2 * p + d]) sum += cost_t_[at_t_[2 * p + d]];
       }
-      if (c_.shear_on[p]) sum += cost_s_[p];
+      if (c_.shear_on[p]) sum += cost_s_[at_s_[p]];
     }
   return sum;
 }

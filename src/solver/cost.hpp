@@ -96,8 +96,6 @@ class Evaluator {
   // read kept (the particles' contact ones too).
   void stiffness_diagonal(const double* z, double* diag);
 
-  // Per-slot bending cost of the last evaluate() (the AMRC criterion).
-  const std::vector<double>& triple_cost() const { return cost_t_; }
   // Newton residual (scaled, 3 per particle) of the last evaluate().
   const std::vector<double>& residual() const { return rho_; }
 
@@ -196,8 +194,11 @@ class Evaluator {
   const Halo& halo_;
   static_assert(kShearSlot == 12 && kEdgeSlot == 6 && kTripleSlot == 9, "buffer slots: 2, 3, 4 particles x 3");
   std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (6, 9, 12), list order
-  std::vector<double> cost_p_, cost_e_, cost_t_, cost_s_;
-  std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx per slot
+  std::vector<double> cost_p_;                    // per particle (grid index)
+  // Per element, in list order like buf_*: a coarse mesh's elements lie far
+  // apart in grid order, one cache line each per array.
+  std::vector<double> cost_e_, cost_t_, cost_s_;  // band cost
+  std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
   std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from

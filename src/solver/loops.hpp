@@ -183,8 +183,9 @@ void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f, int64_t
   if (pol.schedule == Schedule::ActiveLists) c.rebalance();
 }
 
-// Per-tile sums of value(item) over each tile's run, in list order: the
-// fixed-order first stage of every reduction. out[t] for owned tile t.
+// Per-tile sums of value(item) (or value(item, k), k the item's place in
+// the list) over each tile's run, in list order: the fixed-order first stage
+// of every reduction. out[t] for owned tile t.
 template <class F>
 void tile_sums(const ActiveList& list, F&& value, double* out) {
   const int nt = int(list.tile_begin.size()) - 1;
@@ -192,7 +193,12 @@ void tile_sums(const ActiveList& list, F&& value, double* out) {
 #pragma omp for schedule(dynamic, 1) nowait
     for (int t = 0; t < nt; ++t) {
       double s = 0;
-      for (int64_t k = list.tile_begin[t]; k < list.tile_begin[t + 1]; ++k) s += value(list.items[k]);
+      for (int64_t k = list.tile_begin[t]; k < list.tile_begin[t + 1]; ++k) {
+        if constexpr (std::is_invocable_v<F&, int64_t, int64_t>)
+          s += value(list.items[k], k);
+        else
+          s += value(list.items[k]);
+      }
       out[t] = s;
     }
   });
