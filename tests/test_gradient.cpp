@@ -10,6 +10,7 @@
 
 #include "amrc/criterion.hpp"
 #include "solver/kernels.hpp"
+#include "solver/multigrid/block_matrix.hpp"
 #include "world.hpp"
 
 namespace drape::test {
@@ -244,6 +245,109 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
     for (size_t k = 0; k < size_t(w.cloth.layout.tension()); ++k)
       if (!on[k] && !(w.cloth.flags[k / 3] & kHanging)) {
         EXPECT_EQ(ka[k], -7.0) << "entry " << k;
+      }
+  }
+}
+
+// K assembled (Evaluator::assemble_stiffness, the multigrid's finest
+// level) is the matrix-free product's operator: A v equals K v on the free
+// particles to rounding, on the plain and the AMRC mesh (hanging particles
+// folded onto their ends), and A is symmetric block by block.
+TEST(Stiffness, AssembledMatchesTheProduct) {
+  for (bool amrc : {false, true}) {
+    World w = random_world(13, amrc);
+    Evaluator& ev = w.loop->evaluator();
+    ev.settled_cost(w.cloth.z.data());
+    const size_t n = w.cloth.z.size();
+    std::vector<double> v(n, 0.0), kv(n, 0.0), diag(n, 0.0);
+    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+    BlockMatrix A;
+    ev.assemble_stiffness(A);
+    const std::vector<int64_t>& ids = w.lists.particles.items;
+    ASSERT_EQ(A.rows, int64_t(ids.size()));
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<double> vc(3 * ids.size()), av(3 * ids.size());
+    for (size_t r = 0; r < ids.size(); ++r)
+      for (int k = 0; k < 3; ++k) v[3 * ids[r] + k] = vc[3 * r + k] = u(rng);
+    ev.stiffness_product(w.cloth.z.data(), v.data(), kv.data());
+    A.multiply(vc.data(), av.data());
+    double scale = 0;
+    for (size_t r = 0; r < ids.size(); ++r)
+      for (int k = 0; k < 3; ++k) scale = std::max(scale, std::fabs(kv[3 * ids[r] + k]));
+    for (size_t r = 0; r < ids.size(); ++r)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(av[3 * r + k], kv[3 * ids[r] + k], 1e-12 * scale)
+            << "particle " << ids[r] << " axis " << k << (amrc ? " (AMRC)" : "");
+    for (int64_t r = 0; r < A.rows; ++r)
+      for (int64_t b = A.start[r]; b < A.start[r + 1]; ++b) {
+        const double* t = A.block(A.col[b], int32_t(r));
+        ASSERT_NE(t, nullptr) << "no block (" << A.col[b] << ", " << r << ")";
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) EXPECT_NEAR(A.val[9 * b + 3 * i + j], t[3 * j + i], 1e-12 * scale);
+      }
+  }
+}
+
+// K against central differences of the Newton residual it linearises
+// (forces at their hysteresis targets, settled_cost). K leaves out the
+// bending and shear geometric terms (force x the strain's second
+// derivative) and the contact normal's curvature: on a flat cloth whose
+// bands have no width (bending and shear forces zero there), stretched in
+// its plane (tension: the stretch geometric term counts) and pressed into
+// the floor (a flat obstacle), the left-out terms vanish and K must be the
+// residual's whole derivative. Plain and AMRC mesh.
+TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
+  for (bool amrc : {false, true}) {
+    Scene s = flat_scene(13, 11, 0.12, 0.10);
+    s.obstacle.floor = true;
+    s.solver.dt = 2e-3;
+    Fabric f = test_fabric();
+    for (int d = 0; d < 2; ++d) f.bending[d].hb = 0;
+    f.shear.hg = 0;
+    World w(s, f);
+    if (amrc) w.tree = amrc_tree();
+    w.cloth.flags[0] |= kFixed;
+    w.rebuild();
+    // A tilted plane, stretched in it (tension), its lower part inside the
+    // floor's contact layer (half a spacing): flat and unsheared still.
+    const double layer = 0.5 * w.cloth.grid.hi;
+    for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
+      for (int k = 0; k < 2; ++k) w.cloth.z[3 * p + k] *= 1.02;
+      w.cloth.z[3 * p + 2] = 0.5 * layer + 0.3 * (w.cloth.z[3 * p] - w.cloth.z[0]) * 0.1;
+    }
+    Evaluator& ev = w.loop->evaluator();
+    const size_t n = w.cloth.z.size();
+    std::vector<double> v(n, 0.0), kv(n, 0.0), diag(n, 0.0);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int64_t p : w.lists.particles.items)
+      for (int k = 0; k < 3; ++k) v[3 * p + k] = u(rng);
+    ev.settled_cost(w.cloth.z.data());
+    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+    ev.stiffness_product(w.cloth.z.data(), v.data(), kv.data());
+    // The residual at z +- eps v (F0 units; K maps positions in F0 units).
+    const double eps = 1e-7 * w.cloth.grid.hi;
+    auto residual_at = [&](double sign) {
+      std::vector<double> z = w.cloth.z;
+      for (int64_t p : w.lists.particles.items)
+        for (int k = 0; k < 3; ++k) z[3 * p + k] += sign * eps * v[3 * p + k];
+      ev.settled_cost(z.data());
+      return ev.residual();
+    };
+    const std::vector<double> rp = residual_at(1), rm = residual_at(-1);
+    const double F0 = ev.force_scale();
+    double scale = 0;
+    for (int64_t p : w.lists.particles.items)
+      for (int k = 0; k < 3; ++k) scale = std::max(scale, std::fabs(kv[3 * p + k]));
+    int touching = 0;
+    for (int64_t p : w.lists.particles.items) touching += w.cloth.z[3 * p + 2] < layer;
+    ASSERT_GT(touching, 0);
+    ASSERT_LT(touching, int(w.lists.particles.size()));
+    for (int64_t p : w.lists.particles.items)
+      for (int k = 0; k < 3; ++k) {
+        const double fd = (rp[3 * p + k] - rm[3 * p + k]) / (2 * eps) * F0;
+        EXPECT_NEAR(kv[3 * p + k], fd, 1e-5 * scale) << "particle " << p << " axis " << k << (amrc ? " (AMRC)" : "");
       }
   }
 }

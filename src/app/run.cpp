@@ -136,6 +136,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   if (ranks > 1 && scene.solver.gradient == GradientMode::Numeric)
     throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
                      "reach beyond the ghost particles); run it without mpirun");
+  if (ranks > 1 && scene.solver.preconditioner == Preconditioner::Multigrid)
+    throw InputError("solver.preconditioner = \"multigrid\" runs on one rank only (its levels are not "
+                     "split over ranks yet); run it without mpirun or use \"jacobi\"");
   if (scene.parallel.threads > 0) omp_set_num_threads(scene.parallel.threads);
   const int threads = omp_get_max_threads();
   const bool talk = rank == 0 && !opt.quiet;

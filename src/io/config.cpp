@@ -68,6 +68,7 @@ const KeySpec kKeys[] = {
     {"solver", "tolerance", Kind::Float},
     {"solver", "gradient", Kind::String},
     {"solver", "method", Kind::String},
+    {"solver", "preconditioner", Kind::String},
     {"solver", "damping", Kind::Float},
     {"solver", "rest_speed", Kind::Float},
     {"solver", "contact_thickness", Kind::Float},
@@ -494,6 +495,7 @@ void read_scene(const Config& cfg, Scene& s) {
   r.get("solver.tolerance", s.solver.tolerance);
   r.get_enum("solver.gradient", s.solver.gradient, {GradientMode::Analytic, GradientMode::Numeric});
   r.get_enum("solver.method", s.solver.method, {SolverMethod::Newton, SolverMethod::Cg});
+  r.get_enum("solver.preconditioner", s.solver.preconditioner, {Preconditioner::Jacobi, Preconditioner::Multigrid});
   r.get("solver.damping", s.solver.damping);
   r.get("solver.rest_speed", s.solver.rest_speed);
   r.get("solver.contact_thickness", s.solver.contact_thickness);
@@ -709,6 +711,8 @@ std::string scene_to_toml(const Scene& s) {
   line(os, "tolerance", format_double(v.tolerance), "cost per active particle");
   line(os, "gradient", quote(to_string(v.gradient)), "analytic | numeric");
   line(os, "method", quote(to_string(v.method)), "newton (Newton + linear CG) | cg (the paper's nonlinear CG)");
+  line(os, "preconditioner", quote(to_string(v.preconditioner)),
+       "newton's linear CG: jacobi | multigrid (one rank)");
   line(os, "damping", format_double(v.damping), "fraction of velocity removed per step");
   line(os, "rest_speed", format_double(v.rest_speed), "m/s; > 0 stops once at rest");
   line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");

@@ -27,6 +27,7 @@ struct CgSettings {
 struct CgResult {
   int iterations = 0;
   int evaluations = 0;
+  int newton_iterations = 0;  // Newton steps (NewtonSolver; the CG leaves it 0)
   bool converged = false;
   bool stalled = false;  // no descent possible (at machine precision)
   bool stopped = false;  // stop_requested() said so

@@ -25,6 +25,8 @@
 
 namespace drape {
 
+struct BlockMatrix;
+
 struct CostTerms {
   double newton = 0, stretch = 0, bend = 0, shear = 0;
   double total() const { return newton + stretch + bend + shear; }
@@ -95,6 +97,14 @@ class Evaluator {
   // them. Either way, keeping products, it leaves every number the products
   // read kept (the particles' contact ones too).
   void stiffness_diagonal(const double* z, double* diag);
+
+  // K assembled as 3 x 3 blocks over this rank's free particles, row r for
+  // lists().particles.items[r] (the compact vectors' order), hanging
+  // particles folded onto their ends (P^T K P) as in stiffness_product:
+  // the same operator, summed in another order. Reads the numbers
+  // stiffness_diagonal kept at z (call it first). Columns of particles this
+  // rank does not own are left out (one rank sees the whole operator).
+  void assemble_stiffness(BlockMatrix& K);
 
   // Newton residual (scaled, 3 per particle) of the last evaluate().
   const std::vector<double>& residual() const { return rho_; }
@@ -264,6 +274,25 @@ class Evaluator {
   double edge_strain_at(const double* x, int64_t s, int64_t pos) const;
   double triple_curvature_at(const double* x, int64_t s, int64_t pos) const;
   double shear_strain_at(const double* x, int64_t s, int64_t pos) const;
+  // assemble_stiffness's maps, for asm_stamp_'s lists: grid particle -> free
+  // row (-1 else) and -> hanging index (-1 else); each hanging particle as
+  // free rows and weights (hx_), and per free row the hanging particles
+  // leaning on it (ht_, the transpose).
+  struct HxEntry {
+    int32_t row;
+    double w;
+  };
+  void assembly_maps();
+  template <class Add>
+  void row_terms(int64_t r, Add&& add) const;
+  template <class Columns>
+  static void rank_one(const double* kg, int n, int part, const int64_t* ids, double w, Columns&& columns);
+  std::vector<int32_t> asm_index_, asm_hang_;
+  std::vector<int64_t> hx_start_, ht_start_;
+  std::vector<HxEntry> hx_, ht_;
+  uint64_t asm_stamp_ = 0;
+  size_t asm_hanging_ = 0;
+  bool asm_pattern_ = false;
   uint64_t rows_stamp_ = 0;
   size_t rows_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends

@@ -4,20 +4,65 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "solver/multigrid/block_matrix.hpp"
+
 namespace drape {
 
-NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots) : c_(cloth), dots_(dots) {
+NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots, Preconditioner pc)
+    : c_(cloth), dots_(dots), pc_(pc) {
   const size_t n = cloth.layout.size(), nx = size_t(cloth.layout.tension());
   for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &zt_}) v->assign(nx, 0.0);
   for (auto* v : {&pg_, &kp_, &diag_}) v->assign(n, 0.0);
 }
 
-// Jacobi-preconditioned CG for K d = -rho. Its vectors are compact: the free
+// K assembled at z and the levels over it. The compact vectors number the
+// free particles as the particle list does (tile, then index): the
+// assembled rows' order, checked when the lists change.
+void NewtonSolver::setup_multigrid(Evaluator& ev) {
+  const ActiveLists& lists = ev.lists();
+  const uint64_t stamp = lists.stamp ^ (uint64_t(lists.hanging.size()) << 48);
+  if (ids_.size() != size_t(lists.particles.size()) || stamp != mg_stamp_) {
+    ids_.assign(lists.particles.items.begin(), lists.particles.items.end());
+    bool same = true;
+    dots_.for_each_unknown(c_.layout.tension(), [&](int64_t c, int64_t k) {
+      if (c % 3 == 0 && (size_t(c / 3) >= ids_.size() || ids_[size_t(c / 3)] != k / 3)) same = false;
+    });
+    if (!same) throw std::logic_error("NewtonSolver: compact vectors and particle list in different orders");
+    mg_stamp_ = stamp;
+  }
+  ev.assemble_stiffness(k_);
+  mg_.setup(k_, ids_, c_.grid.ni, c_.grid.nj, stamp);
+}
+
+// A V-cycle built on K at an earlier Newton iteration of the same step still
+// preconditions well (K moves little within a step), and its set-up costs
+// several products: it is rebuilt at each minimize()'s first solve (so a
+// restarted run rebuilds where the uninterrupted one did), when the lists
+// changed, and when the last solve took more than twice the iterations of
+// the first solve on this build.
+bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
+  const ActiveLists& lists = ev.lists();
+  const uint64_t stamp = lists.stamp ^ (uint64_t(lists.hanging.size()) << 48);
+  return mg_solves_ == 0 || stamp != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
+}
+
+void NewtonSolver::precondition(const double* r, double* s) {
+  if (pc_ == Preconditioner::Multigrid) {
+    mg_.apply(r, s);
+    return;
+  }
+  const double* dc = dc_.data();
+  dots_.for_each_unknown(c_.layout.tension(), [&](int64_t c, int64_t) { s[c] = r[c] / dc[c]; });
+}
+
+// Preconditioned CG for K d = -rho. Its vectors are compact: the free
 // particles' positions numbered in tile order (Minimizer::tile_sums' c), so
 // that a coarse mesh's few unknowns lie together in memory instead of one
 // triple per cache line. Only the product's operand, its result and the
 // diagonal live at z's indices (pg_, kp_, diag_): the evaluator's kernels
-// read and write particles there.
+// read and write particles there. The preconditioner: the diagonal (each
+// particle's three entries scaled by its block's trace / 3), or one
+// multigrid V-cycle on K assembled.
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
@@ -25,27 +70,39 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
          *dc = dc_.data(), *pg = pg_.data(), *kp = kp_.data(), *diag = diag_.data();
   const double* rho = ev.residual().data();
   const int64_t end = c_.layout.tension();
+  const bool mg = pc_ == Preconditioner::Multigrid;
   {
     ScopedPhase ph(tm, kScaling);
     ev.stiffness_diagonal(z, diag);
+    if (mg && multigrid_stale(ev)) {
+      setup_multigrid(ev);
+      mg_solves_ = 0;
+    }
   }
   double target, rs;
   {
     ScopedPhase ph(tm, kVector);
-    double sums[2];  // b.b, r.s with b = -rho
-    dots_.tile_sums<2>(end, [&](int64_t c, int64_t k, double* acc) {
+    double bb;
+    dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
       const double b = -rho[k];
       dc[c] = diag[k];
       d[c] = 0;
       r[c] = b;
-      s[c] = r[c] / dc[c];
+      acc[0] += b * b;
+    }, &bb);
+    target = rel_tol * rel_tol * bb;
+  }
+  {
+    ScopedPhase ph(tm, kPrecondition);
+    precondition(r, s);
+  }
+  {
+    ScopedPhase ph(tm, kVector);
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) {
       p[c] = s[c];
       pg[k] = p[c];
-      acc[0] += b * b;
-      acc[1] += r[c] * s[c];
-    }, sums);
-    target = rel_tol * rel_tol * sums[0];
-    rs = sums[1];
+    });
+    dots_.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += r[c] * s[c]; }, &rs);
   }
   int it = 0;
   while (it < budget) {
@@ -53,32 +110,53 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
       ScopedPhase g(tm, kGradient);  // one stiffness product: a gradient's worth of work
       ev.stiffness_product(z, pg, kp);
     }
-    ScopedPhase ph(tm, kVector);
-    double pkp;
-    dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
-      kpc[c] = kp[k];
-      acc[0] += p[c] * kpc[c];
-    }, &pkp);
-    if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
-    const double a = rs / pkp;
-    // One pass: the step, the residual, the preconditioned residual and the
-    // two dot products they feed (s is wasted on the last iteration only).
     double sums[2];  // r.r, r.s
-    dots_.compact_sums<2>(end, [&](int64_t c, double* acc) {
-      d[c] += a * p[c];
-      r[c] -= a * kpc[c];
-      s[c] = r[c] / dc[c];
-      acc[0] += r[c] * r[c];
-      acc[1] += r[c] * s[c];
-    }, sums);
+    {
+      ScopedPhase ph(tm, kVector);
+      double pkp;
+      dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+        kpc[c] = kp[k];
+        acc[0] += p[c] * kpc[c];
+      }, &pkp);
+      if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
+      const double a = rs / pkp;
+      if (mg)  // the step, the residual and its norm; s from the V-cycle below
+        dots_.compact_sums<1>(end, [&](int64_t c, double* acc) {
+          d[c] += a * p[c];
+          r[c] -= a * kpc[c];
+          acc[0] += r[c] * r[c];
+        }, sums);
+      else  // one pass: with the diagonal's s and both dot products (s wasted on the last iteration only)
+        dots_.compact_sums<2>(end, [&](int64_t c, double* acc) {
+          d[c] += a * p[c];
+          r[c] -= a * kpc[c];
+          s[c] = r[c] / dc[c];
+          acc[0] += r[c] * r[c];
+          acc[1] += r[c] * s[c];
+        }, sums);
+    }
     ++it;
     if (sums[0] <= target) break;
-    const double beta = sums[1] / rs;
-    rs = sums[1];
+    if (mg) {
+      {
+        ScopedPhase ph(tm, kPrecondition);
+        precondition(r, s);
+      }
+      ScopedPhase ph(tm, kVector);
+      dots_.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += r[c] * s[c]; }, sums + 1);
+    }
+    ScopedPhase ph(tm, kVector);
+    const double rs1 = sums[1];
+    const double beta = rs1 / rs;
+    rs = rs1;
     dots_.for_each_unknown(end, [&](int64_t c, int64_t k) {
       p[c] = s[c] + beta * p[c];
       pg[k] = p[c];
     });
+  }
+  if (mg) {
+    if (mg_solves_++ == 0) mg_first_ = it;
+    mg_last_ = it;
   }
   return it;
 }
@@ -97,6 +175,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   const int64_t end = c_.layout.tension();  // the positions: Newton's unknowns
   if (dots_.unknowns_below(end) > int64_t(zt_.size()))  // 3 per owned particle at most
     throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
+  mg_solves_ = 0;  // a new step (or a retry): the V-cycle is built afresh
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;
@@ -106,6 +185,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     const double eta = std::clamp(std::sqrt(c0 * norm), 1e-3, 0.1);
     const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
     res.iterations += std::max(1, used);
+    ++res.newton_iterations;
     // d_ solves K d = -rho, rho the evaluator's residual in F0 units: the
     // position step is d * F0.
     const double scale = ev.force_scale();

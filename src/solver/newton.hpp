@@ -10,20 +10,39 @@
 #include <vector>
 
 #include "solver/cg.hpp"
+#include "solver/multigrid/multigrid.hpp"
+#include "solver/scene.hpp"
 
 namespace drape {
 
 class NewtonSolver {
  public:
-  NewtonSolver(const Cloth& cloth, Minimizer& dots);
+  NewtonSolver(const Cloth& cloth, Minimizer& dots, Preconditioner pc = Preconditioner::Jacobi);
 
   // Same contract as Minimizer::minimize; `iterations` counts inner CG
   // iterations (each one stiffness product, about one gradient's work).
   CgResult minimize(Evaluator& ev, double* z, const CgSettings& s, Timers& timers,
                     const std::function<void(int, double)>& on_iteration = {});
 
- private:
+  // The multigrid's levels (empty with Jacobi).
+  const std::vector<MultigridLevelStats>& multigrid_stats() const { return mg_.stats(); }
+  Preconditioner preconditioner() const { return pc_; }
+  // The V-cycle's settings (before the first solve, or between steps).
+  int multigrid_levels() const { return pc_ == Preconditioner::Multigrid ? mg_.levels() : 0; }
+  void set_multigrid(const MultigridSettings& s) {
+    mg_.set_settings(s);
+    mg_solves_ = 0;
+  }
+  // Linear CG for K d = -rho at z, to |r| <= rel_tol |b| or `budget`
+  // iterations; the count. d in step() afterwards (compact order).
   int linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol, Timers& tm);
+  const std::vector<double>& step() const { return d_; }
+
+ private:
+  // s = M^-1 r on the compact vectors: the diagonal's or one V-cycle.
+  void precondition(const double* r, double* s);
+  void setup_multigrid(Evaluator& ev);
+  bool multigrid_stale(const Evaluator& ev) const;
 
   const Cloth& c_;
   Minimizer& dots_;
@@ -32,6 +51,13 @@ class NewtonSolver {
   std::vector<double> d_, r_, s_, p_, kpc_, dc_, zt_;
   // At z's indices: the direction for the product, K p, the diagonal.
   std::vector<double> pg_, kp_, diag_;
+  Preconditioner pc_;
+  BlockMatrix k_;   // K assembled (multigrid's finest level)
+  Multigrid mg_;
+  std::vector<int64_t> ids_;  // the free particles, in the compact vectors' order
+  uint64_t mg_stamp_ = 0;
+  // Solves on the current build, and the first's and last's iterations.
+  int mg_solves_ = 0, mg_first_ = 0, mg_last_ = 0;
 };
 
 }  // namespace drape

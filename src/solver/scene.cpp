@@ -38,6 +38,14 @@ const char* to_string(SolverMethod m) {
   return "?";
 }
 
+const char* to_string(Preconditioner p) {
+  switch (p) {
+    case Preconditioner::Jacobi: return "jacobi";
+    case Preconditioner::Multigrid: return "multigrid";
+  }
+  return "?";
+}
+
 const char* to_string(AmrcIndicator i) {
   switch (i) {
     case AmrcIndicator::Angle: return "angle";

@@ -10,6 +10,9 @@ enum class ObstacleShape { Box, Sphere, None };
 enum class GradientMode { Analytic, Numeric };
 enum class Schedule { ActiveLists, Static, Dynamic, Guided };
 enum class SolverMethod { Newton, Cg };
+// The Newton step's linear solve: CG preconditioned by the stiffness's
+// diagonal, or by a multigrid V-cycle over the grid's levels (one rank).
+enum class Preconditioner { Jacobi, Multigrid };
 // What AMRC's thresholds are compared with (AmrcSpec::indicator).
 enum class AmrcIndicator { Angle, Deflection };
 
@@ -54,6 +57,7 @@ struct SolverSpec {
   // newton: Newton steps solved by linear CG (fast); cg: the paper's nonlinear
   // CG on the total cost. Both stop when the same cost is below tolerance.
   SolverMethod method = SolverMethod::Newton;
+  Preconditioner preconditioner = Preconditioner::Jacobi;
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
   double drag = 0.0;            // 1/s: air drag -drag*m*v in each particle's Newton equation
   double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)
@@ -127,6 +131,7 @@ const char* to_string(ObstacleShape s);
 const char* to_string(GradientMode g);
 const char* to_string(Schedule s);
 const char* to_string(SolverMethod m);
+const char* to_string(Preconditioner p);
 const char* to_string(AmrcIndicator i);
 
 }  // namespace drape

@@ -15,7 +15,7 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
                    const Halo& halo)
     : c_(cloth), m_(model), lists_(lists), red_(red), halo_(halo), spec_(spec),
       ev_(cloth, model, lists, tiling, policy, red, halo), cg_(cloth, lists, tiling, red),
-      newton_(cloth, cg_) {
+      newton_(cloth, cg_, spec.preconditioner) {
   z_saved_.assign(cloth.z.size(), 0.0);
   free_ = red.sum_i64(lists.particles.size());
 }
@@ -225,6 +225,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
                : cg_.minimize(ev_, c_.z.data(), cs, timers, on_iteration);
     st.iterations += r.iterations;
     st.evaluations += r.evaluations;
+    st.newton_iterations += r.newton_iterations;
     st.cost = r.cost;
     check_finite(st);
     if (r.converged || r.stopped || c_.dt <= spec_.dt_min * (1 + 1e-12) || st.retries >= 8) break;

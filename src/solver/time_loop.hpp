@@ -16,6 +16,7 @@ struct StepStats {
   int step = 0;
   double time = 0, dt = 0;
   int iterations = 0, evaluations = 0, retries = 0;
+  int newton_iterations = 0;  // Newton steps (solver.method = newton); iterations are then linear CG's
   bool converged = false;
   CostTerms cost;
   double cost_per_particle = 0;
@@ -41,6 +42,7 @@ class TimeLoop {
 
   Evaluator& evaluator() { return ev_; }
   Minimizer& minimizer() { return cg_; }
+  NewtonSolver& newton() { return newton_; }
   int64_t free_particles() const { return free_; }
 
   // After AMRC changed the mesh (and the lists were rebuilt).

@@ -4,10 +4,12 @@
 
 namespace drape {
 
-enum Phase { kSetup, kGradient, kLineSearch, kVector, kScaling, kAmrc, kLists, kMigrate, kOutput, kPhases };
+enum Phase {
+  kSetup, kGradient, kLineSearch, kVector, kScaling, kAmrc, kLists, kMigrate, kOutput, kPrecondition, kPhases
+};
 inline const char* phase_name(int p) {
   static const char* names[] = {"setup", "gradient",     "line_search", "vector_updates", "scaling",
-                                "amrc",  "list_rebuild", "migration",   "output"};
+                                "amrc",  "list_rebuild", "migration",   "output",         "precondition"};
   return names[p];
 }
 

@@ -1,0 +1,170 @@
+// Newton's linear solves on the box drape at the finest mesh, each
+// preconditioner from the same state: the cloth is stepped (Jacobi, fixed
+// dt) to --time, then every variant runs the next --steps steps from that
+// state, and the linear iterations, Newton iterations and seconds per phase
+// are reported side by side (ratios from one run).
+//   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--out FILE.json]
+#include <omp.h>
+
+#include <ctime>
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "io/json.hpp"
+#include "io/kes.hpp"
+#include "solver/world.hpp"
+
+namespace drape {
+namespace {
+
+struct Variant {
+  std::string name;
+  Preconditioner pc;
+  MultigridSettings mg;
+};
+
+struct Result {
+  std::string name;
+  int linear = 0, newton = 0, unconverged = 0, levels = 0;
+  double seconds = 0, cpu = 0, precondition = 0, setup = 0, products = 0;
+  std::string checksum;
+};
+
+// Seconds per call, by repetition for about 0.2 s.
+template <class F>
+double per_call(F&& f) {
+  f();
+  int reps = 0;
+  const double t0 = omp_get_wtime();
+  double t = t0;
+  while (t - t0 < 0.2) {
+    f();
+    ++reps;
+    t = omp_get_wtime();
+  }
+  return (t - t0) / reps;
+}
+
+// What one preconditioned iteration and one set-up cost, in stiffness
+// products: assembling K, the levels' set-up, a V-cycle, K's block product.
+void kernel_times(World& w) {
+  Evaluator& ev = w.loop->evaluator();
+  double* z = w.cloth.z.data();
+  ev.settled_cost(z);
+  std::vector<double> diag(w.cloth.z.size()), v(w.cloth.z.size(), 0.0), kv(w.cloth.z.size());
+  ev.stiffness_diagonal(z, diag.data());
+  for (int64_t p : w.lists.particles.items)
+    for (int k = 0; k < 3; ++k) v[3 * p + k] = 1e-3 * std::sin(double(3 * p + k));
+  const double product = per_call([&] { ev.stiffness_product(z, v.data(), kv.data()); });
+  BlockMatrix K;
+  const double assemble = per_call([&] { ev.assemble_stiffness(K); });
+  const std::vector<int64_t>& ids = w.lists.particles.items;
+  const int n = w.cloth.grid.ni;
+  std::vector<double> r(3 * ids.size()), x(3 * ids.size());
+  for (size_t k = 0; k < r.size(); ++k) r[k] = std::cos(double(k));
+  const double matvec = per_call([&] { K.multiply(r.data(), x.data()); });
+  std::printf("stiffness product %.3f ms; K assembled %.2f products, K x %.2f products (%lld blocks)\n",
+              1e3 * product, assemble / product, matvec / product, (long long)K.blocks());
+  for (int degree : {1, 2, 3}) {
+    Multigrid mg(MultigridSettings{degree, 10.0, 100});
+    mg.setup(K, ids, n, n, 1);
+    const double setup = per_call([&] { mg.setup(K, ids, n, n, 1); });
+    const double cycle = per_call([&] { mg.apply(r.data(), x.data()); });
+    std::printf("degree %d: %d levels; set-up (values) %.2f products, V-cycle %.2f products\n", degree, mg.levels(),
+                setup / product, cycle / product);
+  }
+  std::fflush(stdout);
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"Newton's linear solves: Jacobi and multigrid from one drape state"};
+  int n = 129, steps = 5, threads = 1;
+  double time = 0.12, dt = 5e-4;
+  std::string out;
+  app.add_option("--size", n, "particles per side")->check(CLI::Range(9, 4001));
+  app.add_option("--time", time, "simulated seconds before the compared steps")->check(CLI::Range(0.0, 10.0));
+  app.add_option("--dt", dt, "fixed time step, s")->check(CLI::Range(1e-6, 1e-1));
+  app.add_option("--steps", steps, "steps compared")->check(CLI::Range(1, 100000));
+  app.add_option("--threads", threads, "OpenMP threads")->check(CLI::Range(1, 1024));
+  app.add_option("--out", out, "JSON file");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  omp_set_num_threads(threads);
+  Scene scene;
+  scene.cloth.particles = {n, n};
+  scene.amrc.start_spacing = 0;
+  scene.solver.dt = scene.solver.dt_min = scene.solver.dt_max = dt;
+  scene.solver.preconditioner = Preconditioner::Jacobi;
+  World w(scene, load_fabric(scene.cloth.fabric));
+  Timers tm;
+  while (w.cloth.time < time - 0.5 * dt) w.loop->step(tm);
+  kernel_times(w);
+  const Cloth saved = w.cloth;
+  const Model saved_model = w.model;
+  std::vector<Variant> variants = {{"jacobi", Preconditioner::Jacobi, {}}};
+  for (int degree : {1, 2, 3})
+    for (double ratio : {4.0, 10.0, 30.0})
+      variants.push_back({"multigrid-d" + std::to_string(degree) + "-r" + std::to_string(int(ratio)),
+                          Preconditioner::Multigrid, MultigridSettings{degree, ratio, 100}});
+  std::vector<Result> results;
+  for (const Variant& v : variants) {
+    w.cloth = saved;
+    w.model = saved_model;
+    SolverSpec spec = scene.solver;
+    spec.preconditioner = v.pc;
+    TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red, spec);
+    loop.newton().set_multigrid(v.mg);
+    Timers t;
+    Result r{v.name};
+    const double t0 = omp_get_wtime();
+    const std::clock_t c0 = std::clock();  // CPU time: the machine may be shared
+    for (int k = 0; k < steps; ++k) {
+      const StepStats st = loop.step(t);
+      r.linear += st.iterations;
+      r.newton += st.newton_iterations;
+      r.unconverged += !st.converged;
+    }
+    r.seconds = omp_get_wtime() - t0;
+    r.cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+    r.precondition = t.seconds[kPrecondition];
+    r.setup = t.seconds[kScaling];
+    r.products = t.seconds[kGradient];
+    r.levels = loop.newton().multigrid_levels();
+    results.push_back(r);
+    std::printf("%-20s linear %6d  newton %5d  per newton %6.2f  unconverged %d  levels %d  %8.3f s, cpu %8.3f s "
+                "(precondition %.3f, set-up+diagonal %.3f, products+costs %.3f)\n",
+                r.name.c_str(), r.linear, r.newton, double(r.linear) / std::max(1, r.newton), r.unconverged,
+                r.levels, r.seconds, r.cpu, r.precondition, r.setup, r.products);
+    std::fflush(stdout);
+  }
+  if (!out.empty()) {
+    Json j;
+    j.begin_object();
+    j.value("size", n).value("time", time).value("dt", dt).value("steps", steps).value("threads", threads);
+    j.begin_array("variants");
+    for (const Result& r : results) {
+      j.begin_object();
+      j.value("name", r.name).value("linear_iterations", r.linear).value("newton_iterations", r.newton);
+      j.value("unconverged", r.unconverged).value("levels", r.levels).value("seconds", r.seconds).value("cpu_seconds", r.cpu);
+      j.value("precondition_seconds", r.precondition).value("setup_seconds", r.setup);
+      j.end_object();
+    }
+    j.end_array().end_object();
+    std::ofstream(out) << j.str() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace drape
+
+int main(int argc, char** argv) { return drape::run(argc, argv); }

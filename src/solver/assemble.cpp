@@ -1,0 +1,196 @@
+// K assembled: the stiffness product's operator as 3 x 3 blocks over the
+// free particles, for the multigrid preconditioner. Built row by row from
+// each particle's gather row (the product's fixed order), so any thread
+// count gives the same matrix. The blocks come from the numbers the
+// diagonal kept (the products read the same): an edge's
+//   B = w (T/L (I - u u^T) + slope/L0 u u^T)   (+B on its ends, -B across),
+// a triple's or cell's factor g_a g_b^T, a particle's mass coefficient and
+// contact normal term. Hanging particles fold onto their ends by their
+// interpolation weights, K_free = P^T K P, as in the product.
+#include <algorithm>
+#include <stdexcept>
+
+#include "solver/cost.hpp"
+#include "solver/multigrid/block_matrix.hpp"
+
+namespace drape {
+
+namespace {
+// One column's share of a row's term: the row it lands in and its weight.
+struct Share {
+  int32_t row;
+  double w;
+};
+void merge_shares(std::vector<Share>& s) {
+  std::stable_sort(s.begin(), s.end(), [](const Share& a, const Share& b) { return a.row < b.row; });
+  size_t o = 0;
+  for (size_t k = 0; k < s.size(); ++k) {
+    if (o > 0 && s[o - 1].row == s[k].row) s[o - 1].w += s[k].w;
+    else s[o++] = s[k];
+  }
+  s.resize(o);
+}
+}  // namespace
+
+void Evaluator::assembly_maps() {
+  if (asm_stamp_ == lists_.stamp && lists_.stamp != 0 && asm_hanging_ == lists_.hanging.size() &&
+      !asm_index_.empty())
+    return;
+  asm_stamp_ = lists_.stamp;
+  asm_hanging_ = lists_.hanging.size();
+  const ActiveList& pl = lists_.particles;
+  asm_index_.assign(size_t(c_.grid.n()), -1);
+  for (int64_t r = 0; r < pl.size(); ++r) asm_index_[pl.items[r]] = int32_t(r);
+  // Each hanging particle as a combination of free rows, coarsest sides
+  // first (their ends are final), as interpolate_hanging walks them.
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  std::vector<std::vector<Share>> ex(hl.size());
+  asm_hang_.assign(hl.empty() ? 0 : size_t(c_.grid.n()), -1);
+  std::vector<int32_t>& hang_of = asm_hang_;
+  for (size_t i = 0; i < hl.size(); ++i) hang_of[hl[i].h] = int32_t(i);
+  auto add_end = [&](std::vector<Share>& out, int64_t e, double w) {
+    if (asm_index_[e] >= 0) out.push_back({asm_index_[e], w});
+    else if (hang_of[e] >= 0)
+      for (const Share& s : ex[hang_of[e]]) out.push_back({s.row, w * s.w});
+    // fixed (or another rank's) ends: no unknown behind them
+  };
+  for (size_t k = hl.size(); k-- > 0;) {
+    add_end(ex[k], hl[k].a, 1 - hl[k].t);
+    add_end(ex[k], hl[k].b, hl[k].t);
+    merge_shares(ex[k]);
+  }
+  hx_start_.assign(hl.size() + 1, 0);
+  hx_.clear();
+  for (size_t k = 0; k < hl.size(); ++k) {
+    for (const Share& s : ex[k]) hx_.push_back({s.row, s.w});
+    hx_start_[k + 1] = int64_t(hx_.size());
+  }
+  // The transpose: per free row, the hanging particles that lean on it.
+  ht_start_.assign(size_t(pl.size()) + 1, 0);
+  for (const HxEntry& e : hx_) ++ht_start_[e.row + 1];
+  for (int64_t r = 0; r < pl.size(); ++r) ht_start_[r + 1] += ht_start_[r];
+  ht_.assign(hx_.size(), {0, 0.0});
+  std::vector<int64_t> fill(ht_start_.begin(), ht_start_.end() - 1);
+  for (size_t k = 0; k < hl.size(); ++k)  // ascending k within a row: a fixed order
+    for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) ht_[fill[hx_[e].row]++] = {int32_t(k), hx_[e].w};
+  asm_pattern_ = false;
+}
+
+// Calls add(column row, weight, block) for every term of free row r, in a
+// fixed order: the particle's own terms and elements, then those of each
+// hanging particle that leans on it.
+template <class Add>
+void Evaluator::row_terms(int64_t r, Add&& add) const {
+  const size_t np = size_t(lists_.particles.size());
+  auto columns = [&](int64_t p, double w, const double* blk) {
+    const int32_t row = asm_index_[p];
+    if (row >= 0) {
+      add(row, w, blk);
+      return;
+    }
+    const int32_t k = asm_hang_.empty() ? -1 : asm_hang_[p];
+    if (k >= 0)  // a hanging particle: its ends' rows, by its weights
+      for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(hx_[e].row, w * hx_[e].w, blk);
+    // fixed, or another rank's: no unknown of this rank behind it
+  };
+  auto one = [&](int64_t p, const GatherRow& g, const double* kc, double mass, double w) {
+    double blk[9] = {mass, 0, 0, 0, mass, 0, 0, 0, mass};
+    if (kc[3] > 0) {  // contact: slope n n^T, n the force's direction
+      const double s = kc[4] / (kc[3] * kc[3]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) blk[3 * i + j] += s * kc[i] * kc[j];
+    }
+    columns(p, w, blk);
+    const int32_t* at = g.at;
+    for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
+      for (int k = 0; k < 2; ++k)
+        if (at[k] >= 0) {
+          const int64_t pos = at[k] / kEdgeSlot, part = (at[k] % kEdgeSlot) / 3;
+          const double* ke = &kg_e_[kKgEdge * pos];
+          const int64_t s = pos < lists_.edges.size() ? lists_.edges.items[pos]
+                                                       : lists_.ring_edges.items[pos - lists_.edges.size()];
+          const int64_t ends[2] = {s >> 1, nb_e_[pos]};
+          const double u[3] = {ke[0] * ke[4], ke[1] * ke[4], ke[2] * ke[4]};
+          const double a = ke[7] * ke[5] * ke[4], b = ke[7] * ke[6] - a;
+          double B[9];
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) B[3 * i + j] = (i == j ? a : 0.0) + b * u[i] * u[j];
+          columns(ends[part], w, B);
+          for (double& x : B) x = -x;
+          columns(ends[1 - part], w, B);
+        }
+      for (int k = 2; k < 5; ++k)
+        if (at[k] >= 0) {
+          const int64_t pos = at[k] / kTripleSlot, part = (at[k] % kTripleSlot) / 3;
+          const int64_t s = pos < lists_.triples.size() ? lists_.triples.items[pos]
+                                                         : lists_.ring_triples.items[pos - lists_.triples.size()];
+          int64_t ids[3];
+          triple_ids(s, pos, ids);
+          rank_one(&kg_t_[kKgTriple * pos], 3, int(part), ids, w, columns);
+        }
+    }
+    for (int k = 0; k < 4; ++k)
+      if (at[k] >= 0) {
+        const int64_t pos = at[k] / kShearSlot, part = (at[k] % kShearSlot) / 3;
+        const int64_t s = pos < lists_.shears.size() ? lists_.shears.items[pos]
+                                                      : lists_.ring_shears.items[pos - lists_.shears.size()];
+        int64_t ids[4];
+        cell_ids(s, pos, ids);
+        rank_one(&kg_s_[kKgCell * pos], 4, int(part), ids, w, columns);
+      }
+  };
+  one(lists_.particles.items[r], rows_[r], &kc_[kKc * r], kc_[kKc * r + 5], 1.0);
+  for (int64_t e = ht_start_[r]; e < ht_start_[r + 1]; ++e) {
+    const size_t k = size_t(ht_[e].row);
+    one(lists_.hanging[k].h, hanging_row(k), &kc_[kKc * (np + k)], 0.0, ht_[e].w);  // no mass at h
+  }
+}
+
+// A triple's or cell's blocks in row `part`: factor g_part g_b^T.
+template <class Columns>
+void Evaluator::rank_one(const double* kg, int n, int part, const int64_t* ids, double w, Columns&& columns) {
+  const double* ga = kg + 1 + 3 * part;
+  for (int b = 0; b < n; ++b) {
+    const double* gb = kg + 1 + 3 * b;
+    double blk[9];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) blk[3 * i + j] = kg[0] * ga[i] * gb[j];
+    columns(ids[b], w, blk);
+  }
+}
+
+void Evaluator::assemble_stiffness(BlockMatrix& K) {
+  list_rows();
+  if (!keep_ || !kg_ready_)
+    throw std::logic_error("Evaluator::assemble_stiffness: needs stiffness_diagonal's kept numbers");
+  assembly_maps();
+  const int64_t rows = lists_.particles.size();
+  if (!asm_pattern_ || K.rows != rows) {  // the columns change with the lists only
+    std::vector<std::vector<int32_t>> cols;
+    cols.resize(size_t(rows));
+#pragma omp parallel for schedule(static)
+    for (int64_t r = 0; r < rows; ++r) {
+      row_terms(r, [&](int32_t c, double, const double*) { cols[r].push_back(c); });
+      std::sort(cols[r].begin(), cols[r].end());
+      cols[r].erase(std::unique(cols[r].begin(), cols[r].end()), cols[r].end());
+    }
+    K.set_pattern(cols);
+    asm_pattern_ = true;
+  }
+#pragma omp parallel
+  {
+    std::vector<int64_t> slot(size_t(rows), -1);  // column -> its block in row r (no searches)
+#pragma omp for schedule(static)
+    for (int64_t r = 0; r < rows; ++r) {
+      for (int64_t k = K.start[r]; k < K.start[r + 1]; ++k) slot[K.col[k]] = k;
+      std::fill(K.val.begin() + 9 * K.start[r], K.val.begin() + 9 * K.start[r + 1], 0.0);
+      row_terms(r, [&](int32_t c, double w, const double* blk) {
+        double* out = &K.val[9 * slot[c]];
+        for (int i = 0; i < 9; ++i) out[i] += w * blk[i];
+      });
+      for (int64_t k = K.start[r]; k < K.start[r + 1]; ++k) slot[K.col[k]] = -1;
+    }
+  }
+}
+
+}  // namespace drape

@@ -1,0 +1,72 @@
+#pragma once
+// Geometric multigrid over the cloth's own grid hierarchy, as the Newton
+// step's preconditioner: levels of the free particles on every 2^l-th grid
+// line (transfer.hpp), coarse operators by Galerkin product P^T A P, a
+// Chebyshev smoother (smoother.hpp) and the coarsest level solved by Eigen
+// (coarse_solve.hpp). One V-cycle from zero is the preconditioner: a
+// symmetric positive definite operator, as linear CG needs. Everything sums
+// in fixed orders: the same result on any thread count.
+#include <cstdint>
+#include <vector>
+
+#include "solver/multigrid/block_matrix.hpp"
+#include "solver/multigrid/coarse_solve.hpp"
+#include "solver/multigrid/smoother.hpp"
+#include "solver/multigrid/transfer.hpp"
+
+namespace drape {
+
+struct MultigridSettings {
+  int degree = 2;             // Chebyshev steps before and after the coarse correction
+  double ratio = 10;          // the smoother damps D^-1 A's spectrum above lmax / ratio
+  int64_t coarsest = 100;     // particles at most on the directly solved level
+};
+
+struct MultigridLevelStats {
+  int64_t points = 0, blocks = 0;  // particles and 3 x 3 blocks of its operator
+  int stride = 1;                  // its grid lines' spacing, in finest intervals
+  int64_t cycles = 0;              // V-cycles that visited it
+  double seconds = 0;              // in its smoother, residual and transfers (coarsest: the solve)
+  double setup_seconds = 0;        // Galerkin product, smoother set-up or factorisation
+};
+
+class Multigrid {
+ public:
+  explicit Multigrid(MultigridSettings s = {}) : s_(s) {}
+  // New settings: the next setup builds the levels afresh.
+  void set_settings(const MultigridSettings& s) {
+    s_ = s;
+    stamp_ = 0;
+  }
+  // Levels for A0, whose row r is grid particle ids[r] of an ni x nj grid.
+  // The point sets and patterns are rebuilt when `stamp` (the particle
+  // lists') changes; the values every call. A0 must outlive the next apply.
+  void setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp);
+  // x = M^-1 r: one V-cycle from x = 0 (3 doubles a row of A0).
+  void apply(const double* r, double* x);
+  int levels() const { return int(levels_.size()); }
+  const std::vector<MultigridLevelStats>& stats() const { return stats_; }
+  const BlockMatrix& matrix(int l) const { return l == 0 ? *a0_ : levels_[l].A; }
+
+ private:
+  struct Level {
+    std::vector<int64_t> ids;  // grid particles, in the finest level's order
+    int stride = 1;
+    BlockMatrix A;             // P^T A P of the level above (level 0: a0_)
+    Prolongation P;            // from the next level down to this one
+    Chebyshev smoother;
+    std::vector<double> b, x, r;
+  };
+  void cycle(int l, const double* b, double* x);
+  void build_levels(const std::vector<int64_t>& ids, int ni, int nj);
+
+  MultigridSettings s_;
+  std::vector<Level> levels_;
+  std::vector<MultigridLevelStats> stats_;
+  const BlockMatrix* a0_ = nullptr;
+  CoarseSolve coarse_;
+  uint64_t stamp_ = 0;
+  int64_t rows_ = -1;
+};
+
+}  // namespace drape
