@@ -160,7 +160,7 @@ TEST(Multigrid, PreconditionedIterationsStayFlatAsTheGridIsRefined) {
     std::printf("PCG to 1e-8 at %d: multigrid %d iterations\n", sizes[k], mg_its[k]);
   std::printf("Jacobi: %d at 33, %d at 65\n", jac_its[0], jac_its[1]);
   EXPECT_LE(mg_its[2], 1.5 * mg_its[0]);
-  EXPECT_LE(mg_its[2], 40);
+  EXPECT_LE(mg_its[2], 50);
   EXPECT_GE(jac_its[1], 1.5 * jac_its[0]);  // the problem does get harder with h
 }
 

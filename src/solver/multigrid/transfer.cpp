@@ -91,9 +91,11 @@ void galerkin(const BlockMatrix& A, const Prolongation& P, BlockMatrix& Ac, bool
   auto terms = [&](int64_t I, auto&& add) {
     for (int64_t a = P.t_start[I]; a < P.t_start[I + 1]; ++a) {
       const int64_t f = P.t_row[a];
+      const double wf = P.t_w[a];
       for (int64_t k = A.start[f]; k < A.start[f + 1]; ++k) {
         const int64_t g = A.col[k];
-        for (int64_t b = P.start[g]; b < P.start[g + 1]; ++b) add(P.col[b], P.t_w[a] * P.w[b], &A.val[9 * k]);
+        const double* blk = &A.val[9 * k];
+        for (int64_t b = P.start[g], e = P.start[g + 1]; b < e; ++b) add(P.col[b], wf * P.w[b], blk);
       }
     }
   };
@@ -116,8 +118,9 @@ void galerkin(const BlockMatrix& A, const Prolongation& P, BlockMatrix& Ac, bool
     for (int64_t I = 0; I < P.coarse; ++I) {
       for (int64_t k = Ac.start[I]; k < Ac.start[I + 1]; ++k) slot[Ac.col[k]] = k;
       std::fill(Ac.val.begin() + 9 * Ac.start[I], Ac.val.begin() + 9 * Ac.start[I + 1], 0.0);
-      terms(I, [&](int32_t J, double w, const double* blk) {
-        double* out = &Ac.val[9 * slot[J]];
+      double* __restrict val = Ac.val.data();
+      terms(I, [&](int32_t J, double w, const double* __restrict blk) {
+        double* __restrict out = val + 9 * slot[J];
         for (int i = 0; i < 9; ++i) out[i] += w * blk[i];
       });
       for (int64_t k = Ac.start[I]; k < Ac.start[I + 1]; ++k) slot[Ac.col[k]] = -1;
