@@ -407,3 +407,74 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
        {"amrc.enabled", "analytic"}},
   });
 }
+
+// ------------------------------------------------------- what was solved --
+
+namespace {
+
+// One field of report.json as its text ("newton" with the quotes, 0.03125).
+std::string report_field(const std::string& json, const std::string& key) {
+  const std::regex re("\"" + key + "\": (\"[^\"]*\"|[^,\n}]*)");
+  std::smatch m;
+  return std::regex_search(json, m, re) ? m[1].str() : "(no " + key + ")";
+}
+
+// The closing line: the one that starts "done in".
+std::string closing_line(const std::string& out) {
+  const size_t p = out.find("done in ");
+  return p == std::string::npos ? "(no closing line)" : out.substr(p, out.find('\n', p) - p);
+}
+
+}  // namespace
+
+// report.json and the closing line say what was solved. Grid sequencing on a
+// 65 x 65 grid with start_spacing 0.04 m runs on the level-1 mesh (33 x 33,
+// spacing 2/64 m) with the stage drag; three steps do not bring it to rest.
+TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
+  const fs::path outdir = tmp_dir() / "solved-seq";
+  const Result r = run_drape({"--set", "cloth.particles=[65,65]", "--set", "amrc.start_spacing=0.04", "--set",
+                              "solver.steps=3", "--set", "output.picture=false", "--output", outdir.string()},
+                             "solved-seq");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "particles"), "4225");
+  EXPECT_EQ(report_field(j, "method"), "\"newton\"");
+  EXPECT_EQ(report_field(j, "preconditioner"), "\"jacobi\"");
+  EXPECT_EQ(report_field(j, "drag"), "10");
+  EXPECT_EQ(report_field(j, "stage_drag"), "10");
+  EXPECT_EQ(report_field(j, "particles_solved"), "1089");
+  EXPECT_EQ(report_field(j, "final_spacing"), "0.03125");
+  EXPECT_EQ(report_field(j, "unconverged_steps"), "0");
+  const std::string line = closing_line(r.out);
+  EXPECT_NE(line.find("on the level-1 mesh (1089 particles solved, spacing 31.2 mm; the grid is 65 x 65)"),
+            std::string::npos) << line;
+  EXPECT_NE(line.find("newton with jacobi preconditioner"), std::string::npos) << line;
+  EXPECT_EQ(line.find("unconverged"), std::string::npos) << line;
+}
+
+// The paper's CG on the finest grid, with the scene's own drag: no stage drag,
+// no preconditioner, every particle solved, and no mesh named. A step limit
+// of 2 iterations with dt_min = dt leaves steps unconverged: both say how many.
+TEST(Cli, ReportSaysWhatWasSolvedOnTheFinestMesh) {
+  const fs::path outdir = tmp_dir() / "solved-cg";
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const Result r = run_drape({"--config", small.string(), "--set", "cloth.particles=[17,17]", "--set",
+                              "solver.method=cg", "--set", "solver.drag=2", "--set", "solver.steps=150", "--set",
+                              "solver.max_iterations=2", "--set", "solver.dt_min=0.001", "--set",
+                              "output.picture=false", "--set", "output.every=0", "--output", outdir.string()},
+                             "solved-cg");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "method"), "\"cg\"");
+  EXPECT_EQ(report_field(j, "preconditioner"), "\"none\"");
+  EXPECT_EQ(report_field(j, "drag"), "2");
+  EXPECT_EQ(report_field(j, "stage_drag"), "0");
+  EXPECT_EQ(report_field(j, "particles_solved"), "289");
+  EXPECT_EQ(report_field(j, "final_spacing"), "0.0625");
+  const std::string unconverged = report_field(j, "unconverged_steps");
+  ASSERT_NE(unconverged, "0") << "the case meant to leave steps unconverged converged";
+  const std::string line = closing_line(r.out);
+  EXPECT_EQ(line.find("level-"), std::string::npos) << line;
+  EXPECT_NE(line.find("cg with no preconditioner"), std::string::npos) << line;
+  EXPECT_NE(line.find(", " + unconverged + " unconverged step(s)"), std::string::npos) << line;
+}

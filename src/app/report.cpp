@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "app/signals.hpp"
@@ -24,6 +25,10 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) 
 
 
 
+
+const char* preconditioner_name(SolverMethod m) { return m == SolverMethod::Newton ? "jacobi" : "none"; }
+
+double level_spacing(const Grid& g, int level) { return std::ldexp(std::max(g.hi, g.hj), level); }
 
 int64_t active_particles(const Cloth& c) {
   int64_t n = 0;
@@ -54,7 +59,15 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("scene", scene.name);
   j.begin_object("fabric").value("name", fabric.name).value("source", fabric.source)
       .value("density_kg_m2", fabric.density).end_object();
-  j.value("particles", (long long)cloth.grid.n());
+  j.value("particles", (long long)cloth.grid.n());  // the finest grid's
+  // What was solved: the method, its preconditioner, the drag, and the final
+  // mesh (its unknown particles over all ranks, its spacing).
+  j.value("method", to_string(scene.solver.method));
+  j.value("preconditioner", preconditioner_name(scene.solver.method));
+  j.value("drag", s.drag);
+  j.value("stage_drag", s.sequencing ? scene.amrc.stage_drag : 0.0);
+  j.value("particles_solved", (long long)free_particles);
+  j.value("final_spacing", s.final_spacing);
   j.begin_object("particles_active")
       .value("min", (long long)s.active_min)
       .value("max", (long long)s.active_max)

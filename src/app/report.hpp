@@ -55,7 +55,18 @@ struct Summary {
   int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)
   bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
   Zigzag zigzag;                    // kinks at the mesh spacing in the final state
+  // What the run solved (report.json and the closing line).
+  bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
+  double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
+  double final_spacing = 0;   // m: the final mesh's spacing (the larger of warp and weft;
+                              // with AMRC, the finest leaves')
 };
+
+// The linear solve's preconditioner for a method: Newton's CG is
+// Jacobi-preconditioned, the paper's nonlinear CG has none.
+const char* preconditioner_name(SolverMethod m);
+// The spacing of a uniform mesh `level` levels above the grid's (m).
+double level_spacing(const Grid& g, int level);
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
 int64_t active_particles(const Cloth& c);

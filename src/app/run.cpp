@@ -397,6 +397,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     sum.signal = stop_code / 2;
     sum.final_level = sequence_level;
+    sum.sequencing = sequencing;
+    sum.drag = model.drag;
+    sum.final_spacing = level_spacing(cloth.grid, sequence_level);
     sum.stopped_by_wall_limit = stop_code == 1;
     // A stopped run always leaves a checkpoint to continue from; a finished
     // one does when checkpoints were asked for.
@@ -432,7 +435,16 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                             report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
                                         depth, loop.free_particles()));
       if (!opt.quiet) {
-        progress.finish(sum.at_rest, depth, sum.zigzag.share());
+        Progress::Solved solved;
+        solved.method = to_string(scene.solver.method);
+        solved.preconditioner = preconditioner_name(scene.solver.method);
+        solved.level = sequence_level;
+        solved.particles = loop.free_particles();
+        solved.spacing = sum.final_spacing;
+        solved.ni = cloth.grid.ni;
+        solved.nj = cloth.grid.nj;
+        solved.unconverged = sum.counters.unconverged;
+        progress.finish(sum.at_rest, depth, sum.zigzag.share(), solved);
         print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks);
         print_table2(sum.table2, threads);
       }
