@@ -445,6 +445,9 @@ TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
   EXPECT_EQ(report_field(j, "particles_solved"), "1089");
   EXPECT_EQ(report_field(j, "final_spacing"), "0.03125");
   EXPECT_EQ(report_field(j, "unconverged_steps"), "0");
+  // The first line names the grid and the mesh solved first.
+  EXPECT_NE(r.out.find("65 x 65 grid (1089 particles free), solved first on the level-1 mesh (spacing 31.2 mm)"),
+            std::string::npos) << r.out;
   const std::string line = closing_line(r.out);
   EXPECT_NE(line.find("on the level-1 mesh (1089 particles solved, spacing 31.2 mm; the grid is 65 x 65)"),
             std::string::npos) << line;
@@ -473,6 +476,7 @@ TEST(Cli, ReportSaysWhatWasSolvedOnTheFinestMesh) {
   EXPECT_EQ(report_field(j, "final_spacing"), "0.0625");
   const std::string unconverged = report_field(j, "unconverged_steps");
   ASSERT_NE(unconverged, "0") << "the case meant to leave steps unconverged converged";
+  EXPECT_NE(r.out.find("17 x 17 grid (289 particles free), fabric"), std::string::npos) << r.out;
   const std::string line = closing_line(r.out);
   EXPECT_EQ(line.find("level-"), std::string::npos) << line;
   EXPECT_NE(line.find("cg with no preconditioner"), std::string::npos) << line;

@@ -244,9 +244,14 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       }
     }
     if (talk) {
-      std::printf("drape %s: %s, %d x %d particles (%lld free), fabric %s, %d rank(s) x %d thread(s)\n",
+      // The grid, and the mesh solved first when that is a coarser one (grid sequencing).
+      char mesh[128] = "";
+      if (sequence_level > 0)
+        std::snprintf(mesh, sizeof mesh, ", solved first on the level-%d mesh (spacing %.3g mm)", sequence_level,
+                      1e3 * level_spacing(cloth.grid, sequence_level));
+      std::printf("drape %s: %s, %d x %d grid (%lld particles free)%s, fabric %s, %d rank(s) x %d thread(s)\n",
                   DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
-                  (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
+                  (long long)loop.free_particles(), mesh, fabric.name.c_str(), ranks, threads);
       if (ranks > 1)
         std::printf("tiles: %d of %d x %d particles, METIS over %d ranks: imbalance %.3f, edge cut %lld, "
                     "rank 0 has %lld ghosts from %d neighbour(s)\n",
