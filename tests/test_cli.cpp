@@ -234,6 +234,28 @@ TEST(Cli, DryRunOutputReadsBack) {
   EXPECT_NE(first.out.find("steps = 7"), std::string::npos) << first.out;
 }
 
+// docs/configuration.md names every key the program accepts: each key of the
+// resolved scene --dry-run prints, as `section.key`.
+TEST(Cli, ConfigurationPageNamesEveryKey) {
+  const Result r = run_drape({"--dry-run"}, "dry-keys");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string page = slurp(fs::path(DRAPE_SOURCE_DIR) / "docs" / "configuration.md");
+  ASSERT_FALSE(page.empty()) << "no docs/configuration.md";
+  std::istringstream lines(r.out);
+  std::string line, section;
+  int keys = 0;
+  const std::regex header("^\\[([a-z_]+)\\]"), key("^([a-z_]+) *=");
+  for (std::smatch m; std::getline(lines, line);) {
+    if (std::regex_search(line, m, header)) section = m[1].str() + ".";
+    else if (std::regex_search(line, m, key)) {
+      const std::string name = "`" + section + m[1].str() + "`";
+      ++keys;
+      EXPECT_NE(page.find(name), std::string::npos) << name << " is not in docs/configuration.md";
+    }
+  }
+  EXPECT_GE(keys, 40) << r.out;
+}
+
 TEST(Cli, ExampleScenesDryRun) {
   for (const auto& e : fs::directory_iterator(fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes")) {
     if (e.path().extension() != ".toml") continue;
