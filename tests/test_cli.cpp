@@ -455,7 +455,7 @@ std::string closing_line(const std::string& out) {
 TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
   const fs::path outdir = tmp_dir() / "solved-seq";
   const Result r = run_drape({"--set", "cloth.particles=[65,65]", "--set", "amrc.start_spacing=0.04", "--set",
-                              "solver.steps=3", "--set", "output.picture=false", "--output", outdir.string()},
+                              "solver.steps=3", "--output", outdir.string()},
                              "solved-seq");
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string j = slurp(outdir / "report.json");
@@ -475,6 +475,12 @@ TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
             std::string::npos) << line;
   EXPECT_NE(line.find("newton with jacobi preconditioner"), std::string::npos) << line;
   EXPECT_EQ(line.find("unconverged"), std::string::npos) << line;
+  // The picture says it too (its PNG tEXt chunk).
+  const std::string png = slurp(outdir / "drape.png");
+  const std::string chunk = std::string("tEXtDescription") + '\0' +
+                            "box-drape, 65 x 65 grid: on the level-1 mesh, 1089 particles solved, spacing 31.2 mm; "
+                            "newton with jacobi preconditioner; drag 10/s; t = ";
+  EXPECT_NE(png.find(chunk), std::string::npos) << "drape.png has no such description";
 }
 
 // The paper's CG on the finest grid, with the scene's own drag: no stage drag,

@@ -30,6 +30,22 @@ const char* preconditioner_name(SolverMethod m) { return m == SolverMethod::Newt
 
 double level_spacing(const Grid& g, int level) { return std::ldexp(std::max(g.hi, g.hj), level); }
 
+std::string what_was_solved(const Scene& scene, const Cloth& cloth, const Summary& s, int64_t particles_solved) {
+  const std::string pre = preconditioner_name(scene.solver.method);
+  char b[512];
+  std::snprintf(b, sizeof b,
+                "%s, %d x %d grid: %s%lld particles solved, spacing %.3g mm; %s with %s; drag %g/s; "
+                "t = %.4g s, %s",
+                scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
+                s.final_level > 0 ? ("on the level-" + std::to_string(s.final_level) + " mesh, ").c_str() : "",
+                (long long)particles_solved, 1e3 * s.final_spacing, to_string(scene.solver.method),
+                pre == "none" ? "no preconditioner" : (pre + " preconditioner").c_str(), s.drag, cloth.time,
+                s.at_rest ? "at rest" : "still moving");
+  std::string text = b;
+  if (s.counters.unconverged > 0) text += ", " + std::to_string(s.counters.unconverged) + " unconverged step(s)";
+  return text;
+}
+
 int64_t active_particles(const Cloth& c) {
   int64_t n = 0;
   for (uint8_t f : c.flags) n += f & kActive;

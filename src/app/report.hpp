@@ -67,6 +67,11 @@ struct Summary {
 const char* preconditioner_name(SolverMethod m);
 // The spacing of a uniform mesh `level` levels above the grid's (m).
 double level_spacing(const Grid& g, int level);
+// One line for the picture: the scene, the grid, the mesh solved (its level
+// when coarser than the grid, its particles and spacing), the method and
+// preconditioner, the drag, the simulated time and whether at rest, and the
+// unconverged steps if any. ASCII only.
+std::string what_was_solved(const Scene& scene, const Cloth& cloth, const Summary& s, int64_t particles_solved);
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
 int64_t active_particles(const Cloth& c);

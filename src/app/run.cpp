@@ -431,7 +431,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       h5->finish();
       if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
       if (rank == 0 && scene.output.picture)
-        render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png");
+        render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png", 1024, 768,
+                       what_was_solved(scene, cloth, sum, loop.free_particles()));
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
