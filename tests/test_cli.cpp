@@ -510,3 +510,22 @@ TEST(Cli, ReportSaysWhatWasSolvedOnTheFinestMesh) {
   EXPECT_NE(line.find("cg with no preconditioner"), std::string::npos) << line;
   EXPECT_NE(line.find(", " + unconverged + " unconverged step(s)"), std::string::npos) << line;
 }
+
+// With AMRC, final_spacing is the finest leaf's: a flat cloth started on
+// level-1 leaves (start_spacing 0.04 m on a 65 x 65 grid) merges them all to
+// level 2 at the first adaptation (step 3), 17 x 17 particles 62.5 mm apart.
+TEST(Cli, ReportGivesTheFinestLeafSpacingWithAmrc) {
+  const fs::path outdir = tmp_dir() / "solved-amrc";
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const Result r = run_drape({"--config", small.string(), "--set", "amrc.enabled=true", "--set", "amrc.max_level=2",
+                              "--set", "amrc.start_spacing=0.04", "--set", "solver.steps=3", "--set",
+                              "output.picture=false", "--output", outdir.string()},
+                             "solved-amrc");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "particles"), "4225");
+  EXPECT_EQ(report_field(j, "particles_solved"), "289");
+  EXPECT_EQ(report_field(j, "final_spacing"), "0.0625");
+  EXPECT_EQ(report_field(j, "stage_drag"), "0");  // AMRC is not grid sequencing
+  EXPECT_EQ(report_field(j, "drag"), "0");
+}

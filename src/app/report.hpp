@@ -58,8 +58,8 @@ struct Summary {
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
-  double final_spacing = 0;   // m: the final mesh's spacing (the larger of warp and weft;
-                              // with AMRC, the finest leaves')
+  double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
+                              // (with AMRC, the finest leaf's)
 };
 
 // The linear solve's preconditioner for a method: Newton's CG is

@@ -404,7 +404,12 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.final_level = sequence_level;
     sum.sequencing = sequencing;
     sum.drag = model.drag;
-    sum.final_spacing = level_spacing(cloth.grid, sequence_level);
+    // The final mesh's spacing: the uniform mesh's when sequencing, the finest
+    // leaf's with AMRC (every rank holds the whole tree), else the grid's.
+    int finest_leaf = sequence_level;
+    if (scene.amrc.enabled && amrc && !amrc->tree().levels().empty())
+      finest_leaf = *std::min_element(amrc->tree().levels().begin(), amrc->tree().levels().end());
+    sum.final_spacing = level_spacing(cloth.grid, finest_leaf);
     sum.stopped_by_wall_limit = stop_code == 1;
     // A stopped run always leaves a checkpoint to continue from; a finished
     // one does when checkpoints were asked for.
