@@ -1,6 +1,6 @@
-// Issue 2's figures: time per gradient evaluation and per CG iteration at
+// Time per gradient evaluation and per CG iteration at
 // 1000 x 1000 on one rank, and the finite-difference / analytic gradient time
-// ratio on 100 x 100, both gradients timed in the same run. Issue 3's: the
+// ratio on 100 x 100, both gradients timed in the same run. The
 // cost per active particle of an AMRC mesh against the finest mesh's (257),
 // and what parts of a Newton step cost on either (one layout or pass
 // against another, in the same run).
@@ -217,8 +217,7 @@ BENCHMARK(BM_NewtonStepOverhead)->Arg(257)->Unit(benchmark::kMillisecond)->UseRe
 // One linear-CG iteration's vector passes (NewtonSolver::linear_solve: p.Kp,
 // the fused step / residual pass, the direction update) per unknown, on the
 // finest and an AMRC mesh, with the vectors compact (the solver's layout:
-// unknowns numbered in tile order) and at z's indices (its layout before
-// session 21), back to back in each repetition over the same lists.
+// unknowns numbered in tile order) and at z's indices (its earlier layout), back to back in each repetition over the same lists.
 void BM_LinearSolveVectors(benchmark::State& state) {
   const int n = int(state.range(0));
   static std::map<int, std::unique_ptr<Bed>[2]> made;

@@ -1,4 +1,4 @@
-// Ranks x threads on the machine at hand (issue "Across nodes"): under
+// Ranks x threads on the machine at hand (docs/performance.md, across ranks): under
 // mpirun, each rank takes its METIS share of a 1000 x 1000 cloth mid-drape
 // and runs a fixed number of the paper's CG iterations, and of Newton's
 // inner CG iterations (stiffness products), with halo exchanges and tile-

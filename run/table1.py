@@ -3,13 +3,20 @@ frame of its drape.h5, prints the table and writes table1.json, and
 table1-SIZE.png: where AMRC's and the coarsest mesh's drapes lie off the
 finest one's, beside AMRC's final leaf levels.
 Usage: table1.py DIR PAIR... [--ledger LEDGER.tsv]
-With --ledger (a campaign's, bench/table1-257/ledger.tsv), a row that ran in
+With --ledger (run/table1 writes DIR/ledger.tsv; docs/data/table1-257-ledger.tsv
+is the one behind docs/validation.md's Table 1 at 257:65), a row that ran in
 segments, on different machines or thread counts, gets its time from the
-ledger: see campaign_time."""
+ledger: see campaign_time.
+run/table1 also calls it as
+  table1.py --state RUN_DIR     prints new, stopped or done (see row_state)
+  table1.py --ledger-line LEDGER RUN_DIR START BINARY
+                                appends the segment that just ended (ledger_line)"""
 import collections
 import json
 import os
+import socket
 import sys
+import time
 import tomllib
 
 import h5py
@@ -119,6 +126,46 @@ def plot_errors(out, fine, runs, ref_x, width):
     return path
 
 
+LEDGER_HEAD = ("row", "segment", "wall_seconds", "steps", "simulated_seconds", "at_rest", "particles_mean",
+               "iterations", "date", "host", "started", "threads", "cpu_seconds", "particles_min",
+               "particles_max", "binary")
+
+
+def row_state(run):
+    """Where a row's folder stands: "done" (a report of a run that ended by
+    itself), "stopped" (a checkpoint to continue from: the run was stopped by a
+    signal or its wall limit, or killed before it wrote a report) or "new"."""
+    checkpoint = os.path.isfile(os.path.join(run, "checkpoint.h5"))
+    try:
+        r = json.load(open(os.path.join(run, "report.json")))
+    except (OSError, ValueError):
+        return "stopped" if checkpoint else "new"
+    if r.get("stopped_by_signal") or r.get("stopped_by_wall_limit"):
+        return "stopped" if checkpoint else "new"
+    return "done"
+
+
+def ledger_line(run, start, binary):
+    """One ledger line for a segment that just ended in `run`: row, segment,
+    its wall time, the cumulative steps, simulated time, at rest, mean active
+    particles and CG iterations, date, host, start (epoch), threads, its CPU
+    time (all threads), its fewest and most active particles, and the first 12
+    digits of the binary's sha256 (segments of different code are timed apart).
+    A segment without a report (killed outright) gets NA, and the reason."""
+    seg = os.path.basename(os.path.normpath(run))
+    row = seg.split(".")[0]
+    now, host = time.strftime("%F %T"), socket.gethostname()
+    try:
+        r = json.load(open(os.path.join(run, "report.json")))
+    except (OSError, ValueError) as e:
+        return "\t".join([row, seg] + ["NA"] * 6 + [now, host, str(start), "NA", "# no report: %s" % e])
+    pa = r.get("particles_active", {})
+    return "\t".join(str(v) for v in (
+        row, seg, r["wall_seconds"], r["steps"], r["simulated_seconds"], r["at_rest"], pa.get("mean", "NA"),
+        r["iterations"], now, host, start, r["threads"], r.get("cpu_seconds", "NA"), pa.get("min", "NA"),
+        pa.get("max", "NA"), binary))
+
+
 def ledger_row(run):
     """The campaign row a run folder belongs to: its real name up to the segment
     number (257-amrc-lo.3 and a link 257-amrc to it: 257-amrc-lo)."""
@@ -173,11 +220,12 @@ def campaign_time(segments, machine):
             work_on += work
         else:
             work_off += work
-    if not on or work_on <= 0:
+    if not on or (work_on <= 0 and work_off > 0):
         return None
-    scale = 1 + work_off / work_on
+    scale = 1 + work_off / work_on if work_off > 0 else 1.0
     return {"wall_seconds": wall * scale, "cpu_seconds": None if cpu is None else cpu * scale,
-            "particle_iterations": done, "measured_share": work_on / done, "segments": len(segments)}
+            "particle_iterations": done, "measured_share": work_on / done if done > 0 else 1.0,
+            "segments": len(segments)}
 
 
 def reference_machine(segments):
@@ -190,6 +238,15 @@ def reference_machine(segments):
 
 def main():
     args = sys.argv[1:]
+    if args[:1] == ["--state"] and len(args) == 2:
+        print(row_state(args[1]))
+        return
+    if args[:1] == ["--ledger-line"] and len(args) == 5:
+        path, run, start, binary = args[1:]
+        new = not os.path.exists(path)
+        with open(path, "a") as f:
+            f.write(("\t".join(LEDGER_HEAD) + "\n" if new else "") + ledger_line(run, start, binary) + "\n")
+        return
     ledger = None
     if "--ledger" in args:
         k = args.index("--ledger")
@@ -285,6 +342,8 @@ def apply_ledger(rows, ledger):
             if r["size"] != size or not segs:
                 continue  # not in the ledger: its own report's time
             t = campaign_time(segs, machine)
+            if t is None and len(segs) == 1:
+                continue  # one whole segment elsewhere (SIDE_BY_SIDE's coarsest row): its own report's time
             if t is None:  # a rate from other code or another machine would mislead
                 r.update(wall_seconds=None, cpu_seconds=None, untimed=True)
                 print("table1.py: %d %s: no segment of %s ran on %s, %d thread(s), binary %s: not timed"

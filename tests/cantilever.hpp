@@ -1,5 +1,5 @@
 #pragma once
-// Peirce's cantilever (DESIGN §5): a strip with no hysteresis, clamped
+// Peirce's cantilever (docs/design.md §5): a strip with no hysteresis, clamped
 // horizontally at one end, overhanging by l = 2 (B/w)^(1/3), droops so that
 // the chord from the platform edge to the tip lies 41.5 degrees below
 // horizontal. Quasi-static: the velocity is removed after every step.

@@ -1,4 +1,4 @@
-// Peirce's cantilever (DESIGN §5): a strip with no hysteresis overhanging by
+// Peirce's cantilever (docs/design.md §5): a strip with no hysteresis overhanging by
 // l = 2 (B/w)^(1/3) droops so the chord to its tip is 41.5 degrees below
 // horizontal. The discrete strip converges to it at first order in h (the
 // clamp's triple spreads the root curvature over a whole interval, half of

@@ -234,6 +234,28 @@ TEST(Cli, DryRunOutputReadsBack) {
   EXPECT_NE(first.out.find("steps = 7"), std::string::npos) << first.out;
 }
 
+// docs/configuration.md names every key the program accepts: each key of the
+// resolved scene --dry-run prints, as `section.key`.
+TEST(Cli, ConfigurationPageNamesEveryKey) {
+  const Result r = run_drape({"--dry-run"}, "dry-keys");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string page = slurp(fs::path(DRAPE_SOURCE_DIR) / "docs" / "configuration.md");
+  ASSERT_FALSE(page.empty()) << "no docs/configuration.md";
+  std::istringstream lines(r.out);
+  std::string line, section;
+  int keys = 0;
+  const std::regex header("^\\[([a-z_]+)\\]"), key("^([a-z_]+) *=");
+  for (std::smatch m; std::getline(lines, line);) {
+    if (std::regex_search(line, m, header)) section = m[1].str() + ".";
+    else if (std::regex_search(line, m, key)) {
+      const std::string name = "`" + section + m[1].str() + "`";
+      ++keys;
+      EXPECT_NE(page.find(name), std::string::npos) << name << " is not in docs/configuration.md";
+    }
+  }
+  EXPECT_GE(keys, 40) << r.out;
+}
+
 TEST(Cli, ExampleScenesDryRun) {
   for (const auto& e : fs::directory_iterator(fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes")) {
     if (e.path().extension() != ".toml") continue;
@@ -406,4 +428,104 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
                             "solver.gradient=numeric"},
        {"amrc.enabled", "analytic"}},
   });
+}
+
+// ------------------------------------------------------- what was solved --
+
+namespace {
+
+// One field of report.json as its text ("newton" with the quotes, 0.03125).
+std::string report_field(const std::string& json, const std::string& key) {
+  const std::regex re("\"" + key + "\": (\"[^\"]*\"|[^,\n}]*)");
+  std::smatch m;
+  return std::regex_search(json, m, re) ? m[1].str() : "(no " + key + ")";
+}
+
+// The closing line: the one that starts "done in".
+std::string closing_line(const std::string& out) {
+  const size_t p = out.find("done in ");
+  return p == std::string::npos ? "(no closing line)" : out.substr(p, out.find('\n', p) - p);
+}
+
+}  // namespace
+
+// report.json and the closing line say what was solved. Grid sequencing on a
+// 65 x 65 grid with start_spacing 0.04 m runs on the level-1 mesh (33 x 33,
+// spacing 2/64 m) with the stage drag; three steps do not bring it to rest.
+TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
+  const fs::path outdir = tmp_dir() / "solved-seq";
+  const Result r = run_drape({"--set", "cloth.particles=[65,65]", "--set", "amrc.start_spacing=0.04", "--set",
+                              "solver.steps=3", "--output", outdir.string()},
+                             "solved-seq");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "particles"), "4225");
+  EXPECT_EQ(report_field(j, "method"), "\"newton\"");
+  EXPECT_EQ(report_field(j, "preconditioner"), "\"jacobi\"");
+  EXPECT_EQ(report_field(j, "drag"), "10");
+  EXPECT_EQ(report_field(j, "stage_drag"), "10");
+  EXPECT_EQ(report_field(j, "particles_solved"), "1089");
+  EXPECT_EQ(report_field(j, "final_spacing"), "0.03125");
+  EXPECT_EQ(report_field(j, "unconverged_steps"), "0");
+  // The first line names the grid and the mesh solved first.
+  EXPECT_NE(r.out.find("65 x 65 grid (1089 particles free), solved first on the level-1 mesh (spacing 31.2 mm)"),
+            std::string::npos) << r.out;
+  const std::string line = closing_line(r.out);
+  EXPECT_NE(line.find("on the level-1 mesh (1089 particles solved, spacing 31.2 mm; the grid is 65 x 65)"),
+            std::string::npos) << line;
+  EXPECT_NE(line.find("newton with jacobi preconditioner"), std::string::npos) << line;
+  EXPECT_EQ(line.find("unconverged"), std::string::npos) << line;
+  // The picture says it too (its PNG tEXt chunk).
+  const std::string png = slurp(outdir / "drape.png");
+  const std::string chunk = std::string("tEXtDescription") + '\0' +
+                            "box-drape, 65 x 65 grid: on the level-1 mesh, 1089 particles solved, spacing 31.2 mm; "
+                            "newton with jacobi preconditioner; drag 10/s; t = ";
+  EXPECT_NE(png.find(chunk), std::string::npos) << "drape.png has no such description";
+}
+
+// The paper's CG on the finest grid, with the scene's own drag: no stage drag,
+// no preconditioner, every particle solved, and no mesh named. A step limit
+// of 2 iterations with dt_min = dt leaves steps unconverged: both say how many.
+TEST(Cli, ReportSaysWhatWasSolvedOnTheFinestMesh) {
+  const fs::path outdir = tmp_dir() / "solved-cg";
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const Result r = run_drape({"--config", small.string(), "--set", "cloth.particles=[17,17]", "--set",
+                              "solver.method=cg", "--set", "solver.drag=2", "--set", "solver.steps=150", "--set",
+                              "solver.max_iterations=2", "--set", "solver.dt_min=0.001", "--set",
+                              "output.picture=false", "--set", "output.every=0", "--output", outdir.string()},
+                             "solved-cg");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "method"), "\"cg\"");
+  EXPECT_EQ(report_field(j, "preconditioner"), "\"none\"");
+  EXPECT_EQ(report_field(j, "drag"), "2");
+  EXPECT_EQ(report_field(j, "stage_drag"), "0");
+  EXPECT_EQ(report_field(j, "particles_solved"), "289");
+  EXPECT_EQ(report_field(j, "final_spacing"), "0.0625");
+  const std::string unconverged = report_field(j, "unconverged_steps");
+  ASSERT_NE(unconverged, "0") << "the case meant to leave steps unconverged converged";
+  EXPECT_NE(r.out.find("17 x 17 grid (289 particles free), fabric"), std::string::npos) << r.out;
+  const std::string line = closing_line(r.out);
+  EXPECT_EQ(line.find("level-"), std::string::npos) << line;
+  EXPECT_NE(line.find("cg with no preconditioner"), std::string::npos) << line;
+  EXPECT_NE(line.find(", " + unconverged + " unconverged step(s)"), std::string::npos) << line;
+}
+
+// With AMRC, final_spacing is the finest leaf's: a flat cloth started on
+// level-1 leaves (start_spacing 0.04 m on a 65 x 65 grid) merges them all to
+// level 2 at the first adaptation (step 3), 17 x 17 particles 62.5 mm apart.
+TEST(Cli, ReportGivesTheFinestLeafSpacingWithAmrc) {
+  const fs::path outdir = tmp_dir() / "solved-amrc";
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const Result r = run_drape({"--config", small.string(), "--set", "amrc.enabled=true", "--set", "amrc.max_level=2",
+                              "--set", "amrc.start_spacing=0.04", "--set", "solver.steps=3", "--set",
+                              "output.picture=false", "--output", outdir.string()},
+                             "solved-amrc");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "particles"), "4225");
+  EXPECT_EQ(report_field(j, "particles_solved"), "289");
+  EXPECT_EQ(report_field(j, "final_spacing"), "0.0625");
+  EXPECT_EQ(report_field(j, "stage_drag"), "0");  // AMRC is not grid sequencing
+  EXPECT_EQ(report_field(j, "drag"), "0");
 }

@@ -1,6 +1,6 @@
 // Results do not depend on how many threads ran them, nor on the schedule:
 // the state checksum and the final cost are bitwise the same for 1-4 threads
-// and for active lists, static, dynamic and guided (DESIGN §3).
+// and for active lists, static, dynamic and guided (docs/design.md §3).
 #include <gtest/gtest.h>
 #include <omp.h>
 

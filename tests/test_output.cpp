@@ -228,6 +228,7 @@ struct Png {
   int depth = 0, colour = 0;
   std::vector<uint8_t> rgb;  // decoded, unfiltered
   std::string error;
+  std::vector<std::pair<std::string, std::string>> text;  // tEXt chunks: keyword, text
 };
 
 uint32_t be32(const std::string& s, size_t at) {
@@ -287,6 +288,10 @@ Png decode_png(const std::string& path) {
       png.depth = uint8_t(data[8]), png.colour = uint8_t(data[9]);
     } else if (type == "IDAT") {
       idat += data;
+    } else if (type == "tEXt") {
+      const size_t zero = data.find('\0');
+      if (zero == std::string::npos) png.error = "tEXt without a keyword";
+      else png.text.emplace_back(data.substr(0, zero), data.substr(zero + 1));
     } else if (type == "IEND") {
       ended = true;
     }
@@ -530,6 +535,24 @@ TEST(Picture, DrapeOverBoxIsAShadedPng) {
   const Drape d(81);
   render_picture(d.view(), box_obstacle(), dir + "/drape.png", 320, 240);
   expect_picture(dir + "/drape.png", 320, 240);
+}
+
+// The description goes in as one tEXt chunk, "Description", printable ASCII
+// (anything else as '?'); the image is the same as without it. None: no chunk.
+TEST(Picture, DescriptionIsATextChunk) {
+  const std::string dir = fresh_dir("picture_text");
+  const Drape d(33);
+  render_picture(d.view(), box_obstacle(), dir + "/plain.png", 160, 120);
+  render_picture(d.view(), box_obstacle(), dir + "/text.png", 160, 120,
+                 "box-drape, 33 x 33 grid: on the level-1 mesh, 289 particles solved\xc3\x97");
+  const Png plain = decode_png(dir + "/plain.png"), text = decode_png(dir + "/text.png");
+  ASSERT_EQ(plain.error, "");
+  ASSERT_EQ(text.error, "");
+  EXPECT_TRUE(plain.text.empty());
+  ASSERT_EQ(text.text.size(), 1u);
+  EXPECT_EQ(text.text[0].first, "Description");
+  EXPECT_EQ(text.text[0].second, "box-drape, 33 x 33 grid: on the level-1 mesh, 289 particles solved??");
+  EXPECT_EQ(text.rgb, plain.rgb);
 }
 
 TEST(Picture, SphereWithoutFloorAndNoObstacle) {

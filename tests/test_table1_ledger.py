@@ -2,8 +2,11 @@
 gets its time on the AMRC row's machine (the segments timed there give the
 rate per particle-iteration; the others' work is counted at that rate). A
 machine is (host, threads, binary): segments of other code are counted at
-the rate, not timed."""
+the rate, not timed. Also: run/table1's resumable rows (row_state,
+ledger_line), and the kept ledger behind docs/validation.md's Table 1 at
+257:65 giving that table's times."""
 import importlib.util
+import json
 import os
 import sys
 import tempfile
@@ -28,7 +31,7 @@ def line(row, seg, wall, mean, its, host, threads, cpu="NA", lo="NA", hi="NA", b
 # 50 s: 1e-3 s each here, so 150 s in all. AMRC: 2e4 then 7e3 (the mean
 # falls from 20 to 18 as iterations go from 1000 to 1500), all here.
 LEDGER = (HEAD
-          + line("9-finest", "9-finest", 100, 100, 1000, "lent", 16, lo=100, hi=100)
+          + line("9-finest", "9-finest", 100, 100, 1000, "big", 16, lo=100, hi=100)
           + line("9-amrc", "9-amrc", 30, 20, 1000, "vm", 1, lo=12, hi=100)
           + "9-amrc\t9-amrc.x\tNA\tNA\tNA\tNA\tNA\tNA\td\tvm\t0\tNA\t# no report\n"
           + line("9-finest", "9-finest.2", 50, 100, 1500, "vm", 1, cpu=45, lo=100, hi=100)
@@ -104,6 +107,18 @@ class Ledger(unittest.TestCase):
         self.assertTrue(rows[0]["untimed"])
         self.assertAlmostEqual(rows[1]["wall_seconds"], 12.0)
 
+    def test_one_whole_segment_elsewhere_keeps_its_report_time(self):
+        # SIDE_BY_SIDE runs the coarsest row alone on all threads: one segment,
+        # timed whole on another thread count; its report's time stands.
+        with open(self.path, "a") as f:
+            f.write(line("3-coarsest", "3-coarsest", 4, 9, 200, "vm", 2))
+        rows = [{"size": 9, "mesh": m, "grid": [n, n], "wall_seconds": 1.0, "particles_min": 0,
+                 "particles_max": 0, "ledger_row": "%d-%s" % (n, m.lower())}
+                for m, n in (("finest", 9), ("AMRC", 9), ("coarsest", 3))]
+        table1.apply_ledger(rows, table1.ledger_segments(self.path))
+        self.assertEqual(rows[2]["wall_seconds"], 1.0)
+        self.assertNotIn("untimed", rows[2])
+
     def test_surface_distance_ignores_sliding_along_the_surface(self):
         # The finest drape a plane z = 0.5 x; the other the same grid moved
         # 0.02 along the plane's normal and 0.3 spacings along the plane:
@@ -159,6 +174,78 @@ class Ledger(unittest.TestCase):
             table1.ledger_segments(self.path + ".none")
         self.assertIn("cannot read the ledger", str(e.exception))
         self.assertIn("ledger.tsv.none", str(e.exception))
+
+
+class ResumableRows(unittest.TestCase):
+    """What run/table1 decides per row folder, and the ledger line it appends."""
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.run = os.path.join(self.dir.name, "9-amrc")
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def write(self, name, text):
+        os.makedirs(self.run, exist_ok=True)
+        with open(os.path.join(self.run, name), "w") as f:
+            f.write(text)
+
+    def report(self, signal="", wall_limit=False):
+        self.write("report.json", json.dumps({
+            "wall_seconds": 2.5, "steps": 40, "simulated_seconds": 0.04, "at_rest": False,
+            "iterations": 900, "threads": 1, "cpu_seconds": 2.4, "stopped_by_signal": signal,
+            "stopped_by_wall_limit": wall_limit, "particles_active": {"mean": 20.5, "min": 9, "max": 81}}))
+
+    def test_row_state(self):
+        self.assertEqual(table1.row_state(self.run), "new")
+        self.write("checkpoint.h5", "")
+        self.assertEqual(table1.row_state(self.run), "stopped")  # killed before its report
+        self.report(signal="SIGTERM")
+        self.assertEqual(table1.row_state(self.run), "stopped")
+        self.report(wall_limit=True)
+        self.assertEqual(table1.row_state(self.run), "stopped")
+        self.report()
+        self.assertEqual(table1.row_state(self.run), "done")  # ended by itself, checkpoint or not
+        os.remove(os.path.join(self.run, "checkpoint.h5"))
+        self.report(signal="SIGINT")
+        self.assertEqual(table1.row_state(self.run), "new")  # stopped, but nothing to go on from
+
+    def test_ledger_line_reads_back(self):
+        self.report()
+        path = os.path.join(self.dir.name, "ledger.tsv")
+        with open(path, "w") as f:
+            f.write("\t".join(table1.LEDGER_HEAD) + "\n" + table1.ledger_line(self.run, 17, "abc") + "\n")
+        seg = table1.ledger_segments(path)["9-amrc"]
+        self.assertEqual(len(seg), 1)
+        self.assertEqual((seg[0]["wall"], seg[0]["cpu"], seg[0]["iterations"]), (2.5, 2.4, 900))
+        self.assertEqual((seg[0]["min"], seg[0]["max"], seg[0]["mean"]), (9, 81, 20.5))
+        self.assertEqual(seg[0]["machine"][1:], (1, "abc"))
+
+    def test_a_segment_without_a_report_is_skipped(self):
+        os.makedirs(self.run)
+        path = os.path.join(self.dir.name, "ledger.tsv")
+        with open(path, "w") as f:
+            f.write("\t".join(table1.LEDGER_HEAD) + "\n" + table1.ledger_line(self.run, 17, "abc") + "\n")
+        self.assertEqual(table1.ledger_segments(path), {})
+
+
+class KeptTable(unittest.TestCase):
+    """docs/data: the ledger of the Table 1 rows at 257:65 gives the times
+    docs/data/table1-257.json (and docs/validation.md) state."""
+
+    def test_the_kept_ledger_gives_the_kept_table(self):
+        data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs", "data")
+        segs = table1.ledger_segments(os.path.join(data, "table1-257-ledger.tsv"))
+        with open(os.path.join(data, "table1-257.json")) as f:
+            rows = json.load(f)["rows"]
+        machine = table1.reference_machine(segs[rows[1]["ledger_row"]])
+        for r in rows:
+            t = table1.campaign_time(segs[r["ledger_row"]], machine)
+            self.assertAlmostEqual(t["wall_seconds"], r["wall_seconds"], places=3, msg=r["mesh"])
+            self.assertAlmostEqual(t["measured_share"], r["measured_share"], places=6, msg=r["mesh"])
+        finest, amrc = rows[0]["wall_seconds"], rows[1]["wall_seconds"]
+        self.assertEqual(round(finest / amrc, 2), 6.08)  # the speed-up docs/validation.md states
 
 
 if __name__ == "__main__":

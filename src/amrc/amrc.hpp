@@ -1,5 +1,5 @@
 #pragma once
-// AMRC during a run (DESIGN §2, paper §3): every few steps, the mesh adapts
+// AMRC during a run (docs/design.md §2, paper §3): every few steps, the mesh adapts
 // to the cloth's bending; particles and element slots that become active get
 // values interpolated from the leaf of the old mesh they lie in (positions,
 // history, forces), so the state carries across; then the marks, topology,

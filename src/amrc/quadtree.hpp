@@ -1,5 +1,5 @@
 #pragma once
-// The AMRC hierarchy (DESIGN §2): a quadtree of cells over the finest grid's
+// The AMRC hierarchy (docs/design.md §2): a quadtree of cells over the finest grid's
 // (NI-1) x (NJ-1) intervals. A level-k cell spans 2^k intervals each way from
 // an origin at multiples of 2^k, clipped at the far borders; level 0 is the
 // finest. The leaves are the active mesh. They are stored as the level of the

@@ -44,11 +44,35 @@ class Progress {
     std::fflush(stdout);
   }
 
-  void finish(bool at_rest, double penetration, double zigzag_share) {
+  // What the run solved, for the closing line.
+  struct Solved {
+    const char* method = "";
+    const char* preconditioner = "";
+    int level = 0;              // grid sequencing: the final mesh's level (0: the finest grid)
+    long long particles = 0;    // unknown particles of the final mesh, all ranks
+    double spacing = 0;         // m, the final mesh's
+    int ni = 0, nj = 0;         // the finest grid
+    long long unconverged = 0;  // steps that ended at the iteration limit
+  };
+
+  // The closing line: the time, the state, and what was solved; it names
+  // the mesh when the run ended on a coarser one than the grid.
+  void finish(bool at_rest, double penetration, double zigzag_share, const Solved& s) {
     if (!on_) return;
-    std::printf("done in %s: cloth %s, deepest penetration %.3g m\n",
-                clock_text(seconds(start_, clock::now())).c_str(),
-                at_rest ? "at rest" : "still moving", penetration);
+    std::string mesh;
+    if (s.level > 0) {
+      char b[160];
+      std::snprintf(b, sizeof b, " on the level-%d mesh (%lld particles solved, spacing %.3g mm; the grid is %d x %d)",
+                    s.level, s.particles, 1e3 * s.spacing, s.ni, s.nj);
+      mesh = b;
+    }
+    const std::string pre = std::string(s.preconditioner) == "none" ? std::string("no preconditioner")
+                                                                     : std::string(s.preconditioner) + " preconditioner";
+    std::printf("done in %s: cloth %s%s, %s with %s, deepest penetration %.3g m",
+                clock_text(seconds(start_, clock::now())).c_str(), at_rest ? "at rest" : "still moving",
+                mesh.c_str(), s.method, pre.c_str(), penetration);
+    if (s.unconverged > 0) std::printf(", %lld unconverged step(s)", s.unconverged);
+    std::printf("\n");
     // A few kinks are folds caught between particles; many mean the mesh
     // spacing itself shapes the drape (see solver/zigzag.hpp).
     if (zigzag_share > 0.05)

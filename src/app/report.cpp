@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "app/signals.hpp"
@@ -24,6 +25,26 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) 
 
 
 
+
+const char* preconditioner_name(SolverMethod m) { return m == SolverMethod::Newton ? "jacobi" : "none"; }
+
+double level_spacing(const Grid& g, int level) { return std::ldexp(std::max(g.hi, g.hj), level); }
+
+std::string what_was_solved(const Scene& scene, const Cloth& cloth, const Summary& s, int64_t particles_solved) {
+  const std::string pre = preconditioner_name(scene.solver.method);
+  char b[512];
+  std::snprintf(b, sizeof b,
+                "%s, %d x %d grid: %s%lld particles solved, spacing %.3g mm; %s with %s; drag %g/s; "
+                "t = %.4g s, %s",
+                scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
+                s.final_level > 0 ? ("on the level-" + std::to_string(s.final_level) + " mesh, ").c_str() : "",
+                (long long)particles_solved, 1e3 * s.final_spacing, to_string(scene.solver.method),
+                pre == "none" ? "no preconditioner" : (pre + " preconditioner").c_str(), s.drag, cloth.time,
+                s.at_rest ? "at rest" : "still moving");
+  std::string text = b;
+  if (s.counters.unconverged > 0) text += ", " + std::to_string(s.counters.unconverged) + " unconverged step(s)";
+  return text;
+}
 
 int64_t active_particles(const Cloth& c) {
   int64_t n = 0;
@@ -54,7 +75,15 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("scene", scene.name);
   j.begin_object("fabric").value("name", fabric.name).value("source", fabric.source)
       .value("density_kg_m2", fabric.density).end_object();
-  j.value("particles", (long long)cloth.grid.n());
+  j.value("particles", (long long)cloth.grid.n());  // the finest grid's
+  // What was solved: the method, its preconditioner, the drag, and the final
+  // mesh (its unknown particles over all ranks, its spacing).
+  j.value("method", to_string(scene.solver.method));
+  j.value("preconditioner", preconditioner_name(scene.solver.method));
+  j.value("drag", s.drag);
+  j.value("stage_drag", s.sequencing ? scene.amrc.stage_drag : 0.0);
+  j.value("particles_solved", (long long)free_particles);
+  j.value("final_spacing", s.final_spacing);
   j.begin_object("particles_active")
       .value("min", (long long)s.active_min)
       .value("max", (long long)s.active_max)

@@ -55,7 +55,23 @@ struct Summary {
   int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)
   bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
   Zigzag zigzag;                    // kinks at the mesh spacing in the final state
+  // What the run solved (report.json and the closing line).
+  bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
+  double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
+  double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
+                              // (with AMRC, the finest leaf's)
 };
+
+// The linear solve's preconditioner for a method: Newton's CG is
+// Jacobi-preconditioned, the paper's nonlinear CG has none.
+const char* preconditioner_name(SolverMethod m);
+// The spacing of a uniform mesh `level` levels above the grid's (m).
+double level_spacing(const Grid& g, int level);
+// One line for the picture: the scene, the grid, the mesh solved (its level
+// when coarser than the grid, its particles and spacing), the method and
+// preconditioner, the drag, the simulated time and whether at rest, and the
+// unconverged steps if any. ASCII only.
+std::string what_was_solved(const Scene& scene, const Cloth& cloth, const Summary& s, int64_t particles_solved);
 
 Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
 int64_t active_particles(const Cloth& c);

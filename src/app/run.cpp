@@ -247,9 +247,14 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       }
     }
     if (talk) {
-      std::printf("drape %s: %s, %d x %d particles (%lld free), fabric %s, %d rank(s) x %d thread(s)\n",
+      // The grid, and the mesh solved first when that is a coarser one (grid sequencing).
+      char mesh[128] = "";
+      if (sequence_level > 0)
+        std::snprintf(mesh, sizeof mesh, ", solved first on the level-%d mesh (spacing %.3g mm)", sequence_level,
+                      1e3 * level_spacing(cloth.grid, sequence_level));
+      std::printf("drape %s: %s, %d x %d grid (%lld particles free)%s, fabric %s, %d rank(s) x %d thread(s)\n",
                   DRAPE_VERSION, scene.name.c_str(), cloth.grid.ni, cloth.grid.nj,
-                  (long long)loop.free_particles(), fabric.name.c_str(), ranks, threads);
+                  (long long)loop.free_particles(), mesh, fabric.name.c_str(), ranks, threads);
       if (ranks > 1)
         std::printf("tiles: %d of %d x %d particles, METIS over %d ranks: imbalance %.3f, edge cut %lld, "
                     "rank 0 has %lld ghosts from %d neighbour(s)\n",
@@ -400,6 +405,14 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     sum.signal = stop_code / 2;
     sum.final_level = sequence_level;
+    sum.sequencing = sequencing;
+    sum.drag = model.drag;
+    // The final mesh's spacing: the uniform mesh's when sequencing, the finest
+    // leaf's with AMRC (every rank holds the whole tree), else the grid's.
+    int finest_leaf = sequence_level;
+    if (scene.amrc.enabled && amrc && !amrc->tree().levels().empty())
+      finest_leaf = *std::min_element(amrc->tree().levels().begin(), amrc->tree().levels().end());
+    sum.final_spacing = level_spacing(cloth.grid, finest_leaf);
     sum.stopped_by_wall_limit = stop_code == 1;
     // A stopped run always leaves a checkpoint to continue from; a finished
     // one does when checkpoints were asked for.
@@ -426,7 +439,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       h5->finish();
       if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
       if (rank == 0 && scene.output.picture)
-        render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png");
+        render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png", 1024, 768,
+                       what_was_solved(scene, cloth, sum, loop.free_particles()));
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
@@ -435,7 +449,16 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                             report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
                                         depth, loop.free_particles()));
       if (!opt.quiet) {
-        progress.finish(sum.at_rest, depth, sum.zigzag.share());
+        Progress::Solved solved;
+        solved.method = to_string(scene.solver.method);
+        solved.preconditioner = preconditioner_name(scene.solver.method);
+        solved.level = sequence_level;
+        solved.particles = loop.free_particles();
+        solved.spacing = sum.final_spacing;
+        solved.ni = cloth.grid.ni;
+        solved.nj = cloth.grid.nj;
+        solved.unconverged = sum.counters.unconverged;
+        progress.finish(sum.at_rest, depth, sum.zigzag.share(), solved);
         print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks);
         print_table2(sum.table2, threads);
       }

@@ -26,7 +26,7 @@ struct Decomposition {
   double reduction_seconds() const { return mpi_reducer ? mpi_reducer->seconds : 0.0; }
 };
 
-// The decomposition's figures over all ranks (DESIGN §3, issue 5's targets).
+// The decomposition's figures over all ranks (docs/design.md §3; docs/performance.md).
 struct DecompStats {
   int tiles = 0, tile = 0;
   double imbalance = 1;

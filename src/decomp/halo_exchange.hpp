@@ -1,5 +1,5 @@
 #pragma once
-// Halo exchange (DESIGN §3): each rank's ghosts are the particles of other
+// Halo exchange (docs/design.md §3): each rank's ghosts are the particles of other
 // ranks within `width` of its own, in the max norm, so that the ring of
 // elements within `ring_width` around its tiles can be computed locally. On
 // the finest mesh that is 2 and 1 (a triple reads its neighbours); AMRC's

@@ -1,5 +1,5 @@
 #pragma once
-// Data migration after a repartition (DESIGN §3): tiles whose owner changes
+// Data migration after a repartition (docs/design.md §3): tiles whose owner changes
 // move with everything their particles carry between steps — positions and
 // forces (z), the step history (x1, x2), flags and levels — one message per
 // pair of ranks, tiles in ascending id, particles in grid order within each.

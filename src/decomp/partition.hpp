@@ -1,5 +1,5 @@
 #pragma once
-// The tile graph partitioned with METIS (DESIGN §3): one vertex per tile,
+// The tile graph partitioned with METIS (docs/design.md §3): one vertex per tile,
 // weighted by its work (free particles and active elements); one edge
 // between tiles that exchange ghosts (the 8 neighbours), weighted by the
 // ghost volume between them; one part per rank.

@@ -1,5 +1,5 @@
 #pragma once
-// Rebalance after AMRC (DESIGN §3): a new mesh changes each tile's work;
+// Rebalance after AMRC (docs/design.md §3): a new mesh changes each tile's work;
 // when the ranks' loads drift apart by more than the allowed imbalance,
 // boundary tiles move from the most loaded ranks to their neighbours (few
 // tiles move); if that cannot reach the allowed imbalance, the tile graph is

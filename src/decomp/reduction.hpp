@@ -1,5 +1,5 @@
 #pragma once
-// Reductions across ranks in a fixed order (DESIGN §3). Each tile's partial
+// Reductions across ranks in a fixed order (docs/design.md §3). Each tile's partial
 // is non-zero on exactly one rank, so an MPI sum over a vector indexed by
 // global tile id is exact (x + 0 = x); the tiles are then summed in tile
 // order on every rank. Bitwise the same on any number of ranks.

@@ -1,6 +1,6 @@
 #pragma once
 // Block tiles of T x T particles over the finest grid: the unit of ownership,
-// partitioning and migration (DESIGN §3). A tile's identity depends only on
+// partitioning and migration (docs/design.md §3). A tile's identity depends only on
 // the grid and T, never on the number of ranks. Header-only and MPI-free, so
 // the physics can order its reductions by tile.
 #include <algorithm>

@@ -39,7 +39,9 @@ class Hdf5Output {
 
 // Rank 0 only, full arrays: a shaded picture of the cloth (coloured by height)
 // and the obstacle, seen from above at an angle. Writes path.tmp, renames.
+// A non-empty `description` (printable ASCII) goes into the PNG as a tEXt
+// chunk with the keyword "Description": what the picture shows was solved.
 void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std::string& path,
-                    int width = 1024, int height = 768);
+                    int width = 1024, int height = 768, const std::string& description = "");
 
 }  // namespace drape

@@ -483,8 +483,10 @@ void put_chunk(std::string& png, const char* type, const std::string& data) {
   put_u32(png, uint32_t(crc));
 }
 
-// 8-bit RGB, no interlace; each row with filter type 0 (none).
-std::string encode_png(const std::vector<uint8_t>& rgb, int w, int h) {
+// 8-bit RGB, no interlace; each row with filter type 0 (none). A non-empty
+// description becomes a tEXt chunk (keyword, a zero byte, Latin-1 text:
+// anything but printable ASCII is written as '?').
+std::string encode_png(const std::vector<uint8_t>& rgb, int w, int h, const std::string& description) {
   std::string raw;
   raw.reserve(size_t(h) * (3 * w + 1));
   for (int y = 0; y < h; ++y) {
@@ -504,6 +506,12 @@ std::string encode_png(const std::vector<uint8_t>& rgb, int w, int h) {
   put_u32(ihdr, uint32_t(h));
   ihdr += std::string("\x08\x02\x00\x00\x00", 5);  // depth 8, RGB, deflate, filter 0, no interlace
   put_chunk(png, "IHDR", ihdr);
+  if (!description.empty()) {
+    std::string text = "Description";
+    text.push_back('\0');
+    for (char c : description) text.push_back(c >= 0x20 && c < 0x7f ? c : '?');
+    put_chunk(png, "tEXt", text);
+  }
   put_chunk(png, "IDAT", z);
   put_chunk(png, "IEND", "");
   return png;
@@ -529,7 +537,7 @@ void write_atomically(const std::string& path, const std::string& bytes) {
 }  // namespace
 
 void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std::string& path,
-                    int width, int height) {
+                    int width, int height, const std::string& description) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384)
     throw std::runtime_error("picture: bad size " + std::to_string(width) + "x" + std::to_string(height));
   if (!f.x || f.ni < 2 || f.nj < 2) throw std::runtime_error("picture: no cloth to draw");
@@ -555,7 +563,7 @@ void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std:
   draw_floor(img, cam, fit, shadow_map({&cloth, &solid}, fit), obstacle.floor);
   draw_mesh(img, solid, cam, light);
   draw_mesh(img, cloth, cam, light);
-  write_atomically(path, encode_png(downsample(img, ss), width, height));
+  write_atomically(path, encode_png(downsample(img, ss), width, height, description));
 }
 
 }  // namespace drape

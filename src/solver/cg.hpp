@@ -1,7 +1,7 @@
 #pragma once
 // Nonlinear conjugate gradient (Polak-Ribiere+, diagonally scaled) with an
 // Armijo line search and restarts: the minimizer of the paper's Algorithm 1.
-// Dot products are summed per tile in a fixed order (DESIGN §3).
+// Dot products are summed per tile in a fixed order (docs/design.md §3).
 #include <algorithm>
 #include <cstdint>
 #include <functional>

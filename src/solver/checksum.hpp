@@ -1,5 +1,5 @@
 #pragma once
-// The state checksum (DESIGN §4): every particle's positions, element forces
+// The state checksum (docs/design.md §4): every particle's positions, element forces
 // and flags are hashed together with its global id, and the hashes summed
 // (mod 2^64, two independent lanes). A sum is the same in any order, so the
 // digest identifies the state however the particles were split over ranks,

@@ -1,5 +1,5 @@
 #pragma once
-// The cloth laid out on the finest grid, once, for the whole run (DESIGN §2):
+// The cloth laid out on the finest grid, once, for the whole run (docs/design.md §2):
 // particle p = i*NJ + j; element slots hang off their first particle:
 //   edge   slot 2p+d: p -> next particle along direction d (0 warp/i, 1 weft/j)
 //   triple slot 2p+d: prev -> p -> next along d (bending at p)

@@ -1,5 +1,5 @@
 #pragma once
-// The total cost of DESIGN §1 and its analytic gradient:
+// The total cost of docs/design.md §1 and its analytic gradient:
 //   Newton:  1/2 sum_p |r_p / F0|^2,  r_p = m(a - g) - F_contact + sum_e f_e c_e dk_e/dx_p
 //   bands:   1/2 sum_e (excess_e * lambda_e / F0)^2   (stretch, bend, shear)
 //   memory:  1/2 mu sum_e ((f_e - stop_e) * lambda_e / F0)^2, stop_e the

@@ -1,5 +1,5 @@
 #pragma once
-// Ghost particles (DESIGN §3): a rank computes the elements of its own tiles
+// Ghost particles (docs/design.md §3): a rank computes the elements of its own tiles
 // and of a ring one particle wide around them, whose contributions its own
 // particles gather; those elements read particles up to two away. Before a
 // vector laid out like z is read there, its ghost entries get their owners'

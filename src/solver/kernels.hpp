@@ -48,7 +48,7 @@ inline T edge_length(const V3<T>& a, const V3<T>& b, V3<T> g[2]) {
 // Triple a-b-c: signed turning angle at b about the frozen axis n (unit),
 // between the edges projected on the plane normal to n:
 // theta = atan2((e1 x e2).n, e1p.e2p). Only bending out of the cloth's plane
-// (about n) counts; the axis is set from the step's history (DESIGN §1).
+// (about n) counts; the axis is set from the step's history (docs/design.md §1).
 // Projected, atan2's arguments vanish only when an edge lies along n (an
 // in-plane right-angle turn); with the plain e1.e2 they vanished at any
 // right-angle turn about an axis normal to n, which grid-scale crumples at

@@ -1,7 +1,7 @@
 #pragma once
 // Everything the cost needs besides the cloth's arrays: KES bands per
 // direction, gravity, contact, the time step, and the scales that make the
-// cost terms comparable (DESIGN §1, §6).
+// cost terms comparable (docs/design.md §1, §6).
 #include "solver/band.hpp"
 #include "solver/cloth.hpp"
 #include "solver/contact.hpp"

@@ -4,7 +4,7 @@
 // solution as the paper's CG on the total cost, but each Newton step solves
 // K d = -r by preconditioned linear CG, whose convergence depends on the
 // condition number of K, not its square as for CG on a least-squares cost
-// (DESIGN §6). A backtracking line search on the cost keeps every accepted
+// (docs/design.md §6). A backtracking line search on the cost keeps every accepted
 // step a decrease.
 #include <functional>
 #include <vector>

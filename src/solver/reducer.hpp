@@ -1,5 +1,5 @@
 #pragma once
-// Global sums in a fixed order (DESIGN §3): each rank hands in one partial per
+// Global sums in a fixed order (docs/design.md §3): each rank hands in one partial per
 // owned tile; the result is the sum over all tiles in tile order, bitwise the
 // same for any number of ranks and threads. The MPI version lives in
 // src/decomp/; physics only sees this interface.

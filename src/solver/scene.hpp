@@ -84,7 +84,7 @@ struct ParallelSpec {
   double imbalance = 1.05;      // max / mean work per rank above which AMRC's new mesh is repartitioned
 };
 
-// AMRC (DESIGN §2): the criterion is the turning angle of the mesh at each
+// AMRC (docs/design.md §2): the criterion is the turning angle of the mesh at each
 // triple (rad), the bending a leaf's elements resolve: a leaf splits where it
 // exceeds `refine`, children merge where all stay below `coarsen`.
 struct AmrcSpec {
@@ -112,8 +112,9 @@ struct AmrcSpec {
   double start_spacing = 0.04;
   // Air drag (1/s) on those coarser meshes: they are the way to the rest
   // state, not the result, so they may settle faster than air would let
-  // them (drag vanishes at rest, so it does not move the rest state). The
-  // finest mesh runs with solver.drag.
+  // them (drag vanishes at rest, so it does not move the rest state). While
+  // sequencing, every mesh, the finest included, runs with
+  // max(solver.drag, stage_drag); without it, solver.drag applies.
   double stage_drag = 10.0;
 };
 

@@ -1,7 +1,7 @@
 #pragma once
 // The paper's Algorithm 1: for each time step, minimise the total cost by CG
 // starting from the step's history, then accept. Adds what a stiff cost needs
-// (DESIGN §6): a step that does not converge is retried with half the time
+// (docs/design.md §6): a step that does not converge is retried with half the time
 // step, and the time step adapts to keep the iterations per step bounded.
 #include <functional>
 

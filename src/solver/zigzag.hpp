@@ -4,7 +4,7 @@
 // repeats such a fold (its own spacing is smaller), so where a drape has
 // many, its shape depends on the mesh. On the box drapes they lay mostly in
 // the cloth's plane, where shear read per particle (a cross's mean) did not
-// see them (an hourglass mode, README: grid-scale zigzag); shear read per
+// see them (an hourglass mode, docs/design.md §1); shear read per
 // cell does. report.json's `zigzag` counts them in the final state.
 #include <cstdint>
 #include <vector>
