@@ -33,7 +33,6 @@ struct Result {
   std::string name;
   int linear = 0, newton = 0, unconverged = 0, levels = 0;
   double seconds = 0, cpu = 0, precondition = 0, setup = 0, products = 0;
-  std::string checksum;
 };
 
 // Seconds per call, by repetition for about 0.2 s.

@@ -407,6 +407,24 @@ TEST(CliBad, MoreRanksThanTiles) {
   EXPECT_FALSE(fs::exists(outdir));
 }
 
+// The multigrid preconditioner runs on one rank: two are refused with one
+// message, exit 2 and no output directory.
+TEST(CliBad, MultigridOnTwoRanks) {
+  const fs::path outdir = tmp_dir() / "mg-ranks-out";
+  const fs::path err = tmp_dir() / "mg-ranks.stderr";
+  const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) +
+                          " --set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"' --output " +
+                          sh(outdir.string()) + " </dev/null >/dev/null 2>" + sh(err.string());
+  const int rc = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
+  const std::string text = slurp(err);
+  size_t ours = 0;
+  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
+  EXPECT_EQ(ours, 1u) << text;
+  EXPECT_NE(text.find("solver.preconditioner = \"multigrid\" runs on one rank only"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(outdir));
+}
+
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a
 // combination the program cannot run are refused before anything is written.
 TEST(CliBad, CheckpointAndAmrcKeys) {
@@ -509,6 +527,43 @@ TEST(Cli, ReportSaysWhatWasSolvedOnTheFinestMesh) {
   EXPECT_EQ(line.find("level-"), std::string::npos) << line;
   EXPECT_NE(line.find("cg with no preconditioner"), std::string::npos) << line;
   EXPECT_NE(line.find(", " + unconverged + " unconverged step(s)"), std::string::npos) << line;
+}
+
+// Newton with the multigrid preconditioner: report.json counts Newton's
+// steps and the linear iterations (the `iterations` of a Newton run) and
+// lists the levels (finest first, each coarser, the finest cycled), and the
+// closing line names the preconditioner.
+TEST(Cli, ReportCountsNewtonAndMultigrid) {
+  const fs::path outdir = tmp_dir() / "solved-mg";
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const Result r = run_drape({"--config", small.string(), "--set", "cloth.particles=[33,33]", "--set",
+                              "amrc.start_spacing=0", "--set", "solver.preconditioner=\"multigrid\"", "--set",
+                              "solver.end_time=0.15", "--set", "solver.steps=1000", "--set", "output.picture=false",
+                              "--set", "output.every=0",
+                              "--output", outdir.string()},
+                             "solved-mg");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = slurp(outdir / "report.json");
+  EXPECT_EQ(report_field(j, "preconditioner"), "\"multigrid\"");
+  const long newton = std::stol(report_field(j, "newton_iterations"));
+  EXPECT_GT(newton, 0);
+  EXPECT_EQ(report_field(j, "linear_iterations"), report_field(j, "iterations"));
+  EXPECT_GE(std::stol(report_field(j, "linear_iterations")), newton);
+  const size_t at = j.find("\"multigrid\": [");
+  ASSERT_NE(at, std::string::npos) << j;
+  const std::string levels = j.substr(at, j.find(']', at) - at);
+  std::vector<long> particles, cycles;
+  const std::regex re("\"particles\": ([0-9]+),[^}]*?\"cycles\": ([0-9]+)");
+  for (std::sregex_iterator m(levels.begin(), levels.end(), re), e; m != e; ++m) {
+    particles.push_back(std::stol((*m)[1].str()));
+    cycles.push_back(std::stol((*m)[2].str()));
+  }
+  ASSERT_GE(particles.size(), 2u) << levels;
+  EXPECT_EQ(particles[0], std::stol(report_field(j, "particles_solved")));
+  for (size_t k = 1; k < particles.size(); ++k) EXPECT_LT(particles[k], particles[k - 1]) << levels;
+  // One V-cycle a CG iteration: before the first, and after each but the last.
+  EXPECT_EQ(cycles[0], std::stol(report_field(j, "linear_iterations"))) << levels;
+  EXPECT_NE(closing_line(r.out).find("newton with multigrid preconditioner"), std::string::npos) << r.out;
 }
 
 // With AMRC, final_spacing is the finest leaf's: a flat cloth started on

@@ -26,12 +26,14 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads) 
 
 
 
-const char* preconditioner_name(SolverMethod m) { return m == SolverMethod::Newton ? "jacobi" : "none"; }
+const char* preconditioner_name(const SolverSpec& s) {
+  return s.method == SolverMethod::Newton ? to_string(s.preconditioner) : "none";
+}
 
 double level_spacing(const Grid& g, int level) { return std::ldexp(std::max(g.hi, g.hj), level); }
 
 std::string what_was_solved(const Scene& scene, const Cloth& cloth, const Summary& s, int64_t particles_solved) {
-  const std::string pre = preconditioner_name(scene.solver.method);
+  const std::string pre = preconditioner_name(scene.solver);
   char b[512];
   std::snprintf(b, sizeof b,
                 "%s, %d x %d grid: %s%lld particles solved, spacing %.3g mm; %s with %s; drag %g/s; "
@@ -79,7 +81,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   // What was solved: the method, its preconditioner, the drag, and the final
   // mesh (its unknown particles over all ranks, its spacing).
   j.value("method", to_string(scene.solver.method));
-  j.value("preconditioner", preconditioner_name(scene.solver.method));
+  j.value("preconditioner", preconditioner_name(scene.solver));
   j.value("drag", s.drag);
   j.value("stage_drag", s.sequencing ? scene.amrc.stage_drag : 0.0);
   j.value("particles_solved", (long long)free_particles);
@@ -118,6 +120,22 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("restarted_from_step", s.first_step);
   j.value("iterations", (long long)n.iterations);
   j.value("evaluations", (long long)n.evaluations);
+  // Newton: its steps, and the linear CG's iterations (the `iterations` above).
+  const bool newton = scene.solver.method == SolverMethod::Newton;
+  j.value("newton_iterations", (long long)n.newton_iterations);
+  j.value("linear_iterations", (long long)(newton ? n.iterations : 0));
+  // The multigrid's levels (finest first): their size, V-cycles and seconds.
+  j.begin_array("multigrid");
+  for (const MultigridLevelStats& l : s.multigrid)
+    j.begin_object()
+        .value("particles", (long long)l.points)
+        .value("blocks", (long long)l.blocks)
+        .value("stride", l.stride)
+        .value("cycles", (long long)l.cycles)
+        .value("seconds", l.seconds)
+        .value("setup_seconds", l.setup_seconds)
+        .end_object();
+  j.end_array();
   j.value("simulated_seconds", cloth.time);
   j.value("iterations_per_simulated_second", cloth.time > 0 ? n.iterations / cloth.time : 0.0);
   j.value("max_iterations_in_a_step", (long long)n.max_step_iterations);

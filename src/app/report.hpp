@@ -55,6 +55,7 @@ struct Summary {
   int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)
   bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
   Zigzag zigzag;                    // kinks at the mesh spacing in the final state
+  std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
@@ -62,9 +63,9 @@ struct Summary {
                               // (with AMRC, the finest leaf's)
 };
 
-// The linear solve's preconditioner for a method: Newton's CG is
-// Jacobi-preconditioned, the paper's nonlinear CG has none.
-const char* preconditioner_name(SolverMethod m);
+// The linear solve's preconditioner: Newton's CG has solver.preconditioner
+// (jacobi or multigrid), the paper's nonlinear CG none.
+const char* preconditioner_name(const SolverSpec& s);
 // The spacing of a uniform mesh `level` levels above the grid's (m).
 double level_spacing(const Grid& g, int level);
 // One line for the picture: the scene, the grid, the mesh solved (its level

@@ -108,6 +108,7 @@ void add_step(RunCounters& n, const StepStats& st, int64_t active) {
   n.iterations += st.iterations;
   n.particle_iterations += st.iterations * active;
   n.evaluations += st.evaluations;
+  n.newton_iterations += st.newton_iterations;
   n.projections += st.projections;
   n.max_step_iterations = std::max<int64_t>(n.max_step_iterations, st.iterations);
   n.unconverged += st.converged ? 0 : 1;
@@ -431,6 +432,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.decomp = decomp_stats(dec, tiling, comm);
     const double depth = max_penetration(cloth, model, lists, red);
     sum.zigzag = count_zigzags(cloth, lists.particles.items, red);
+    sum.multigrid = loop.newton().multigrid_stats();
     settle_for_output();
     const Checksum ck = state_checksum(cloth, tiling, owned, red);
     {
@@ -451,7 +453,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       if (!opt.quiet) {
         Progress::Solved solved;
         solved.method = to_string(scene.solver.method);
-        solved.preconditioner = preconditioner_name(scene.solver.method);
+        solved.preconditioner = preconditioner_name(scene.solver);
         solved.level = sequence_level;
         solved.particles = loop.free_particles();
         solved.spacing = sum.final_spacing;

@@ -26,7 +26,8 @@ using namespace h5;
 namespace {
 
 const char* const kFormat = "drape checkpoint";
-const int64_t kFormatVersion = 4;  // 2: counters gained particle_iterations; 3: shear read on crosses; 4: on cells
+const int64_t kFormatVersion = 5;  // 2: counters gained particle_iterations; 3: shear read on crosses; 4: on cells;
+                                   // 5: counters gained newton_iterations
 
 // ------------------------------------------------------------ the digest --
 
@@ -86,7 +87,7 @@ std::vector<std::pair<std::string, Curve*>> curves_of(F& f) {
 std::vector<double> counter_numbers(const RunCounters& r) {
   return {double(r.iterations), double(r.evaluations), double(r.projections),
           double(r.max_step_iterations), double(r.unconverged), double(r.calm),
-          r.dt_min, r.dt_max, r.cg_first_step, double(r.particle_iterations)};
+          r.dt_min, r.dt_max, r.cg_first_step, double(r.particle_iterations), double(r.newton_iterations)};
 }
 
 RunCounters counters_from(const std::vector<double>& v) {
@@ -101,6 +102,7 @@ RunCounters counters_from(const std::vector<double>& v) {
   r.dt_max = v[7];
   r.cg_first_step = v[8];
   r.particle_iterations = int64_t(v[9]);
+  r.newton_iterations = int64_t(v[10]);
   return r;
 }
 

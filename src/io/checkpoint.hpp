@@ -41,6 +41,7 @@ struct RunCounters {
   int64_t particle_iterations = 0;  // CG iterations times the active particles, summed over steps
   double dt_min = 1e300, dt_max = 0;
   double cg_first_step = 1.0;     // nonlinear CG's carried first trial step
+  int64_t newton_iterations = 0;  // Newton steps (solver.method = newton; iterations are then linear CG's)
 };
 
 struct CheckpointState {

@@ -29,7 +29,7 @@ void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
     stride *= 2;
     levels_.back().stride = stride;
   }
-  stats_.assign(levels_.size(), {});
+  stats_.resize(levels_.size());  // cycles and seconds add up over the run, level by level
   for (size_t l = 0; l < levels_.size(); ++l) {
     Level& L = levels_[l];
     const size_t n = 3 * L.ids.size();

@@ -45,6 +45,7 @@ class Multigrid {
   // x = M^-1 r: one V-cycle from x = 0 (3 doubles a row of A0).
   void apply(const double* r, double* x);
   int levels() const { return int(levels_.size()); }
+  // Per level: its current size, and cycles and seconds over every build so far.
   const std::vector<MultigridLevelStats>& stats() const { return stats_; }
   const BlockMatrix& matrix(int l) const { return l == 0 ? *a0_ : levels_[l].A; }
 
