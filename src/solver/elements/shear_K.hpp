@@ -12,6 +12,9 @@ namespace drape {
 
 // Corner c with warp neighbour a and weft neighbour b: shear angle
 // phi = pi/2 - angle(a-c, b-c) = atan2(u.v, |u x v|). Particle order [c, a, b].
+// With s = |u x v|, co = u.v and s^2 + co^2 = |u|^2 |v|^2, the gradient
+// along u is the part of v normal to u over s (along v alike): no cross
+// products beyond s's, and one reciprocal per length.
 template <class T>
 inline void shear_terms(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[3], T& s, T& co) {
   using std::sqrt;
@@ -19,10 +22,9 @@ inline void shear_terms(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[
   const V3<T> w = cross(u, v);
   s = sqrt(dot(w, w));
   co = dot(u, v);
-  const T inv = T(1) / (s * s + co * co);
-  const T is = T(1) / s;
-  const V3<T> gu = inv * (s * v - (co * is) * cross(v, w));
-  const V3<T> gv = inv * (s * u - (co * is) * cross(w, u));
+  const T is = T(1) / s, ia = T(1) / dot(u, u), ib = T(1) / dot(v, v);
+  const V3<T> gu = is * (v - (co * ia) * u);
+  const V3<T> gv = is * (u - (co * ib) * v);
   g[0] = T(-1) * (gu + gv);
   g[1] = gu;
   g[2] = gv;
@@ -37,20 +39,17 @@ inline void shear_terms_hv(const V3<double>& c, const V3<double>& a, const V3<do
   const V u = a - c, v = b - c;
   const V du = r[1] - r[0], dv = r[2] - r[0];
   const V w = cross(u, v);
-  const V dw = cross(du, v) + cross(u, dv);
   const double s = std::sqrt(dot(w, w)), co = dot(u, v);
-  const double inv = 1.0 / (s * s + co * co);
-  const double is = 1.0 / s;
-  const double ds = is * dot(w, dw), dco = dot(du, v) + dot(u, dv);
-  const double dinv = -2.0 * inv * inv * (s * ds + co * dco);
-  const double k = co * is, dk = (dco - k * ds) * is;  // d(co / s)
-  const V P = cross(v, w), Q = cross(w, u);
-  const V tu = s * v - k * P, tv = s * u - k * Q;
-  const V gu = inv * tu, gv = inv * tv;
-  const V dP = cross(dv, w) + cross(v, dw), dQ = cross(dw, u) + cross(w, du);
-  const V dtu = (ds * v + s * dv) - (dk * P + k * dP);
-  const V dtv = (ds * u + s * du) - (dk * Q + k * dQ);
-  const V dgu = dinv * tu + inv * dtu, dgv = dinv * tv + inv * dtv;
+  const double uu = dot(u, u), vv = dot(v, v);
+  const double is = 1.0 / s, ia = 1.0 / uu, ib = 1.0 / vv;
+  const double udu = dot(u, du), vdv = dot(v, dv), dco = dot(du, v) + dot(u, dv);
+  const double ds = is * (vv * udu + uu * vdv - co * dco);  // from s^2 = |u|^2 |v|^2 - co^2
+  const double ka = co * ia, kb = co * ib;
+  const double dka = (dco - 2.0 * ka * udu) * ia, dkb = (dco - 2.0 * kb * vdv) * ib;
+  const V gu = is * (v - ka * u), gv = is * (u - kb * v);
+  // d(is t) = is (dt - ds (is t)).
+  const V dgu = is * ((dv - (dka * u + ka * du)) - ds * gu);
+  const V dgv = is * ((du - (dkb * v + kb * dv)) - ds * gv);
   g[0] = -1.0 * (gu + gv);
   g[1] = gu;
   g[2] = gv;
