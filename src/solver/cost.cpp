@@ -344,11 +344,12 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   hanging_residuals();
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
-  for_edges([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); });
-  for_triples([&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); });
-  for_shears([&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); });
-  for_each_item(lists_.particles, pol_,
-                [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
+  // The element passes and the particles' gathers in one parallel region,
+  // as the cost pass (a fork and join each cost more than a small mesh's pass).
+  elements_then_particles([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); },
+                          [&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); },
+                          [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
+                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
   // A hanging particle's gradient: its contact term and its elements'.
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
