@@ -3,19 +3,27 @@
 // ratio on 100 x 100, both gradients timed in the same run. The
 // cost per active particle of an AMRC mesh against the finest mesh's (257),
 // and what parts of a Newton step cost on either (one layout or pass
-// against another, in the same run).
-//   build/bench/bench_gradient --benchmark_counters_tabular=true
+// against another, in the same run). BM_Kernels: each kernel's bytes
+// (solver/traffic.hpp) over its seconds against a STREAM triad measured in
+// the same run; --json FILE writes those figures (and the finite-difference
+// ratio) to FILE.
+//   build/bench/bench_gradient --benchmark_counters_tabular=true [--json FILE]
 #include <benchmark/benchmark.h>
 #include <omp.h>
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <memory>
 #include <string>
 
+#include "io/json.hpp"
 #include "mid_drape.hpp"
+#include "solver/traffic.hpp"
 
 namespace drape {
 namespace {
@@ -32,6 +40,12 @@ struct Bed : World {
     return k;
   }
 };
+
+// Figures for --json, by benchmark and name (filled as the benchmarks run).
+std::map<std::string, std::map<std::string, double>>& results() {
+  static std::map<std::string, std::map<std::string, double>> r;
+  return r;
+}
 
 double seconds_of(const std::function<void()>& f) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -59,6 +73,79 @@ void BM_Gradient(benchmark::State& state) {
   state.counters["particles"] = double(bed.cloth.grid.n());
   state.counters["threads"] = omp_get_max_threads();
 }
+// STREAM's triad a = b + s c over arrays far larger than the caches, on
+// the threads the kernels use; the best of `reps` passes, in bytes / second
+// counted as STREAM does (24 bytes an entry).
+double triad_bandwidth(int reps = 8) {
+  const int64_t n = int64_t(1) << 24;  // 3 x 128 MiB
+  std::unique_ptr<double[]> a(new double[n]), b(new double[n]), c(new double[n]);
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i) a[i] = 0, b[i] = 1, c[i] = 2;  // first touch on the threads that use them
+  double best = 1e30;
+  const double s = 3.0;
+  for (int r = 0; r < reps; ++r) {
+    const double t = seconds_of([&] {
+      double *pa = a.get(), *pb = b.get(), *pc = c.get();
+#pragma omp parallel for schedule(static)
+      for (int64_t i = 0; i < n; ++i) pa[i] = pb[i] + s * pc[i];
+    });
+    best = std::min(best, t);
+  }
+  benchmark::DoNotOptimize(a.get());
+  return 24.0 * double(n) / best;
+}
+
+// Each kernel at n x n on the given threads: the best of its repetitions'
+// seconds, the bytes the model says it moves, their ratio, and that
+// bandwidth's share of a triad measured in the same run (before and after
+// the kernels, the better of the two).
+void BM_Kernels(benchmark::State& state) {
+  static Bed bed(int(state.range(0)));
+  Evaluator& ev = bed.loop->evaluator();
+  double* z = bed.cloth.z.data();
+  const size_t nz = bed.cloth.z.size();
+  std::vector<double> g(nz), v(nz, 1e-6), kv(nz), diag(nz);
+  ev.evaluate(z, g.data());  // lists and rows set up outside the timing
+  ev.settled_cost(z);
+  ev.stiffness_diagonal(z, diag.data());
+  const TrafficCounts counts = traffic_counts(ev.lists(), bed.cloth);
+  struct Kernel {
+    const char* name;
+    KernelBytes bytes;
+    std::function<void()> run;
+    double best = 1e30;
+  };
+  // The product first: evaluate() ends the settled numbers it reads (they
+  // stay kept: kg_ready_), not its kept ones.
+  Kernel kernels[] = {
+      {"stiffness_product", product_bytes(), [&] { ev.stiffness_product(z, v.data(), kv.data()); }},
+      {"cost", cost_bytes(), [&] { ev.evaluate(z, nullptr); }},
+      {"cost_gradient", cost_gradient_bytes(), [&] { ev.evaluate(z, g.data()); }},
+  };
+  double triad = triad_bandwidth();
+  for (auto _ : state)
+    for (Kernel& k : kernels) k.best = std::min(k.best, seconds_of(k.run));
+  triad = std::max(triad, triad_bandwidth());
+  auto& out = results()["kernels"];
+  out["n"] = double(state.range(0));
+  out["particles"] = double(counts.particles);
+  out["threads"] = omp_get_max_threads();
+  out["triad_GBps"] = 1e-9 * triad;
+  state.counters["triad_GBps"] = 1e-9 * triad;
+  for (const Kernel& k : kernels) {
+    const double bytes = k.bytes.total(counts), gbps = 1e-9 * bytes / k.best;
+    const std::string n = k.name;
+    out[n + "_s"] = k.best;
+    out[n + "_bytes"] = bytes;
+    out[n + "_bytes_per_particle"] = bytes / double(counts.particles);
+    out[n + "_GBps"] = gbps;
+    out[n + "_of_triad"] = gbps / (1e-9 * triad);
+    state.counters[n + "_ms"] = 1e3 * k.best;
+    state.counters[n + "_of_triad"] = gbps / (1e-9 * triad);
+  }
+}
+BENCHMARK(BM_Kernels)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
 BENCHMARK(BM_Gradient)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The Newton solver's inner iteration: one stiffness product K v.
@@ -286,22 +373,66 @@ void BM_LinearSolveVectors(benchmark::State& state) {
 BENCHMARK(BM_LinearSolveVectors)->Arg(257)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Both gradients timed back to back in each repetition: the ratio is a
-// measurement of one run, not of two runs on a shared machine.
+// measurement of one run, not of two runs on a shared machine. Each the
+// best of its repetitions (the analytic one, milliseconds, of ten a
+// repetition): on cores shared with other jobs the mean measured them.
 void BM_NumericOverAnalytic(benchmark::State& state) {
   static Bed bed(int(state.range(0)));
   std::vector<double> g(bed.cloth.z.size());
-  double analytic = 0, numeric = 0;
+  double analytic = 1e30, numeric = 1e30;
   for (auto _ : state) {
-    analytic += seconds_of([&] { bed.loop->evaluator().evaluate(bed.cloth.z.data(), g.data()); });
-    numeric += seconds_of([&] { bed.loop->evaluator().numeric_gradient(bed.cloth.z.data(), g.data()); });
+    for (int k = 0; k < 10; ++k)
+      analytic = std::min(analytic, seconds_of([&] { bed.loop->evaluator().evaluate(bed.cloth.z.data(), g.data()); }));
+    numeric = std::min(numeric,
+                       seconds_of([&] { bed.loop->evaluator().numeric_gradient(bed.cloth.z.data(), g.data()); }));
   }
-  state.counters["analytic_ms"] = 1e3 * analytic / state.iterations();
-  state.counters["numeric_ms"] = 1e3 * numeric / state.iterations();
+  state.counters["analytic_ms"] = 1e3 * analytic;
+  state.counters["numeric_ms"] = 1e3 * numeric;
   state.counters["numeric_over_analytic"] = numeric / analytic;
+  auto& out = results()["numeric_over_analytic"];
+  out["n"] = double(state.range(0));
+  out["analytic_s"] = analytic;
+  out["numeric_s"] = numeric;
+  out["ratio"] = numeric / analytic;
 }
 BENCHMARK(BM_NumericOverAnalytic)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 }  // namespace
 }  // namespace drape
 
-BENCHMARK_MAIN();
+// Google Benchmark's main, with --json FILE taken out of the arguments first.
+int main(int argc, char** argv) {
+  std::string json;
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--json") == 0) {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "bench_gradient: --json needs a file name\n");
+        return 2;
+      }
+      json = argv[++i];
+    } else {
+      argv[kept++] = argv[i];
+    }
+  }
+  argc = kept;
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  if (json.empty()) return 0;
+  drape::Json j;
+  j.begin_object();
+  for (const auto& [bench, figures] : drape::results()) {
+    j.begin_object(bench.c_str());
+    for (const auto& [name, value] : figures) j.value(name.c_str(), value);
+    j.end_object();
+  }
+  j.end_object();
+  std::FILE* f = std::fopen(json.c_str(), "w");
+  if (!f || std::fputs((j.str() + "\n").c_str(), f) < 0 || std::fclose(f) != 0) {
+    std::fprintf(stderr, "bench_gradient: cannot write %s\n", json.c_str());
+    return 1;
+  }
+  return 0;
+}

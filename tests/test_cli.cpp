@@ -278,6 +278,27 @@ TEST(Cli, Help) {
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag << " not in: " << r.out;
 }
 
+// The run's peak resident set: in the timing table and report.json, in
+// bytes, and plausible for a small cloth (above the program's own code and
+// libraries, below what 9 x 9 particles could take).
+TEST(Cli, ReportsPeakRss) {
+  const fs::path dir = tmp_dir() / "peak-rss";
+  const Result r = run_drape({"--set", "cloth.particles=[9,9]", "--set", "solver.steps=1", "--set",
+                              "output.picture=false", "--output", dir.string()},
+                             "peak-rss");
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::smatch m;
+  const std::string table = r.out;
+  ASSERT_TRUE(std::regex_search(table, m, std::regex("peak RSS +([0-9.]+) +MB"))) << r.out;
+  const double table_mb = std::stod(m[1]);
+  const std::string report = slurp(dir / "report.json");
+  ASSERT_TRUE(std::regex_search(report, m, std::regex("\"peak_rss_bytes\": ([0-9]+)"))) << report;
+  const double bytes = std::stod(m[1]);
+  EXPECT_GT(bytes, 4e6);
+  EXPECT_LT(bytes, 2e9);
+  EXPECT_NEAR(table_mb, 1e-6 * bytes, 0.06);
+}
+
 // --output naming an existing file: refused before anything is written, and
 // the file is left as it was.
 TEST(CliBad, OutputThatIsAFileIsRefusedAndUntouched) {

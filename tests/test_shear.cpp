@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "amrc/amrc.hpp"
 #include "solver/shear_cell.hpp"
@@ -105,6 +106,36 @@ TEST(ShearCell, AnInPlaneZigzagShearsEveryCell) {
 
 // Shear forces are per unit width: a split leaf's children keep the parent's,
 // and a merged parent takes the mean of its children's.
+// The cell's angle from one atan2 of the corners' product (shear_cell) is
+// the mean of the four corners' own atan2 angles, on cells from slightly to
+// strongly sheared and folded (where a pair's difference passes pi/2 and
+// each pair takes its own atan2).
+TEST(ShearCell, OneArgumentIsTheMeanOfTheCornerAngles) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int fallbacks = 0;
+  for (int sample = 0; sample < 2000; ++sample) {
+    const double amount = sample < 1000 ? 0.1 : 0.9, h = 1e-3;
+    V3<double> x[4];
+    const double at[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    for (int k = 0; k < 4; ++k)
+      x[k] = {h * (at[k][0] + amount * u(rng)), h * (at[k][1] + amount * u(rng)), h * amount * u(rng)};
+    double mean = 0, pr = 1, qr = 1;
+    double s[4], co[4];
+    for (const ShearCorner& q : kShearCorners) {
+      V3<double> g[3];
+      shear_terms(x[q.c], x[q.a], x[q.b], g, s[q.c], co[q.c]);
+      mean += 0.25 * q.sign * std::atan2(co[q.c], s[q.c]);
+    }
+    pr = s[0] * s[1] + co[0] * co[1];
+    qr = s[3] * s[2] + co[3] * co[2];
+    fallbacks += !(pr > 0 && qr > 0);
+    V3<double> g[4];
+    EXPECT_NEAR(shear_cell(x, g), mean, 1e-14) << "sample " << sample;
+  }
+  EXPECT_GT(fallbacks, 0) << "no cell took each pair's own atan2";
+}
+
 TEST(ShearCell, AmrcCarriesTheForceAcrossSplitAndMerge) {
   Scene s = flat_scene(9, 9, 0.08, 0.08);
   World w(s, test_fabric());

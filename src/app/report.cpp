@@ -68,6 +68,12 @@ int64_t process_cpu_microseconds() {
   return us(u.ru_utime) + us(u.ru_stime);
 }
 
+int64_t peak_rss_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return int64_t(u.ru_maxrss) * 1024;  // Linux counts it in KiB
+}
+
 std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& cloth,
                         const Summary& s, const Timers& tm, double wall, double cpu, int ranks, int threads,
                         const std::string& checksum, double penetration_depth, int64_t free_particles) {
@@ -166,6 +172,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("total_mass", cloth.total_mass());
   j.value("wall_seconds", wall);
   j.value("cpu_seconds", cpu);
+  j.value("peak_rss_bytes", (long long)s.peak_rss);
   j.begin_object("phases");
   for (int p = 0; p < kPhases; ++p) j.value(phase_name(p), tm.seconds[p]);
   j.end_object();
@@ -215,7 +222,7 @@ void print_table2(const Table2& t, int threads) {
 }
 
 void print_timing_table(const Timers& tm, double wall, double cpu, const std::string& checksum, const DecompStats& d,
-                        int ranks) {
+                        int ranks, int64_t peak_rss) {
   std::printf("\n%-16s %12s %8s\n", "phase", "seconds", "share");
   for (int p = 0; p < kPhases; ++p)
     std::printf("%-16s %12.3f %7.1f%%\n", phase_name(p), tm.seconds[p],
@@ -228,6 +235,7 @@ void print_timing_table(const Timers& tm, double wall, double cpu, const std::st
   }
   std::printf("%-16s %12.3f\n", "wall", wall);
   std::printf("%-16s %12.3f   (all ranks and threads)\n", "cpu", cpu);
+  std::printf("%-16s %12.1f   MB (the largest rank's)\n", "peak RSS", 1e-6 * double(peak_rss));
   std::printf("state checksum   %s\n", checksum.c_str());
   std::fflush(stdout);
 }

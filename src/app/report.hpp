@@ -61,6 +61,7 @@ struct Summary {
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
   double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
                               // (with AMRC, the finest leaf's)
+  int64_t peak_rss = 0;             // bytes: the largest of the ranks' peak resident sets
 };
 
 // The linear solve's preconditioner: Newton's CG has solver.preconditioner
@@ -81,12 +82,15 @@ double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists,
 // This process's CPU time so far (user + system, all its threads), in µs:
 // beside the wall time, it times a run that shared its cores with others.
 int64_t process_cpu_microseconds();
+// This process's peak resident set so far, in bytes (getrusage's ru_maxrss).
+int64_t peak_rss_bytes();
 // cpu: the CPU seconds of all ranks together.
 std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& cloth,
                         const Summary& s, const Timers& tm, double wall, double cpu, int ranks, int threads,
                         const std::string& checksum, double penetration_depth, int64_t free_particles);
 void print_table2(const Table2& t, int threads);
+// peak_rss: bytes, the largest rank's.
 void print_timing_table(const Timers& tm, double wall, double cpu, const std::string& checksum, const DecompStats& d,
-                        int ranks);
+                        int ranks, int64_t peak_rss);
 
 }  // namespace drape

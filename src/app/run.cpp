@@ -446,6 +446,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
+    sum.peak_rss = int64_t(red.max(double(peak_rss_bytes())));                    // collective; exact below 2^53
     if (rank == 0) {
       write_text_atomically(opt.output_dir + "/report.json",
                             report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
@@ -461,7 +462,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         solved.nj = cloth.grid.nj;
         solved.unconverged = sum.counters.unconverged;
         progress.finish(sum.at_rest, depth, sum.zigzag.share(), solved);
-        print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks);
+        print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks, sum.peak_rss);
         print_table2(sum.table2, threads);
       }
     }

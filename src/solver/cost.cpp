@@ -244,22 +244,15 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V r[3];
-  V3<Dual> xd[3];
-  for (int k = 0; k < 3; ++k) {
-    r[k] = residual_of(c_, rho_, ids[k]);
-    const double rv[3] = {r[k].x, r[k].y, r[k].z};
-    xd[k] = load3(z + 3 * ids[k], rv);
-  }
-  const V3<Dual> n = load3<Dual>(&c_.bend_axis[3 * s]);
-  V3<Dual> gd[3];
-  drape::bend_gradient(xd[0], xd[1], xd[2], n, gd);
+  for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_, ids[k]);
+  V g[3], hr[3];
+  bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), r, g, hr);
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
   const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
   for (int k = 0; k < 3; ++k) {
-    const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
-    put(&buf_t_[kTripleSlot * pos + 3 * k], fw * hr + gq * g, 1.0);
-    gr += dot(g, r[k]);
+    put(&buf_t_[kTripleSlot * pos + 3 * k], fw * hr[k] + gq * g[k], 1.0);
+    gr += dot(g[k], r[k]);
   }
   grad[c_.layout.moment() + s] = w * gr / m_.force_scale + gf_t_[pos];
 }
@@ -267,22 +260,17 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
 void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   int64_t ids[4];
   cell_ids(s, pos, ids);
+  const CellAt a = cell_at(ids, z);
   V r[4];
-  V3<Dual> xd[4];
-  for (int k = 0; k < 4; ++k) {
-    r[k] = residual_of(c_, rho_, ids[k]);
-    const double rv[3] = {r[k].x, r[k].y, r[k].z};
-    xd[k] = load3(z + 3 * ids[k], rv);
-  }
-  V3<Dual> gd[4];
-  shear_cell<Dual, false>(xd, gd);
+  for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_, ids[k]);
+  V g[4], hr[4];
+  shear_cell_hv(a.x, r, g, hr);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
   const double fa = f * A / m_.force_scale, gq = gq_s_[pos];
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
-    const V g{gd[k].x.v, gd[k].y.v, gd[k].z.v}, hr{gd[k].x.d, gd[k].y.d, gd[k].z.d};
-    put(&buf_s_[kShearSlot * pos + 3 * k], fa * hr + gq * g, 1.0);
-    gr += dot(g, r[k]);
+    put(&buf_s_[kShearSlot * pos + 3 * k], fa * hr[k] + gq * g[k], 1.0);
+    gr += dot(g[k], r[k]);
   }
   grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[pos];
 }
@@ -356,11 +344,12 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   hanging_residuals();
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
-  for_edges([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); });
-  for_triples([&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); });
-  for_shears([&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); });
-  for_each_item(lists_.particles, pol_,
-                [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
+  // The element passes and the particles' gathers in one parallel region,
+  // as the cost pass (a fork and join each cost more than a small mesh's pass).
+  elements_then_particles([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); },
+                          [&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); },
+                          [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
+                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
   // A hanging particle's gradient: its contact term and its elements'.
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};

@@ -20,12 +20,6 @@ inline void put(double* out, const V& v) {
   out[2] = v.z;
 }
 inline V value_of(const V3<Dual>& a) { return {a.x.v, a.y.v, a.z.v}; }
-// A strain's change along v, from its gradient g over particles ids.
-inline double along(const V* g, const int64_t* ids, int n, const double* v) {
-  double d = 0;
-  for (int k = 0; k < n; ++k) d += dot(g[k], at(v, ids[k]));
-  return d;
-}
 inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 
 // Each element's generalized strain at positions x, as its band reads it:
@@ -147,19 +141,9 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[s], k_slope_[s] / c_.edge_rest[s],
                 c_.edge_width[s], ke);
     }
-    // edge_length on duals at (z, v), its eps parts written out in the same
-    // operations, with the value parts kept: bit for bit its numbers.
-    const V e = load3<double>(ke), ed = at(v, q) - at(v, p);
-    const double Lv = ke[3], iv = ke[4];
-    const V u = iv * e;
-    const double dd = (ed.x * e.x + e.x * ed.x) + (ed.y * e.y + e.y * ed.y) + (ed.z * e.z + e.z * ed.z);
-    const double Ld = dd / (2 * Lv);
-    const double invd = (0.0 * Lv - 1.0 * Ld) / (Lv * Lv);
-    const V ud{invd * e.x + iv * ed.x, invd * e.y + iv * ed.y, invd * e.z + iv * ed.z};
-    const V dg[2] = {{0.0 * u.x + -1.0 * ud.x, 0.0 * u.y + -1.0 * ud.y, 0.0 * u.z + -1.0 * ud.z}, ud};
-    const V vg[2] = {-1.0 * u, u};
-    const double w = ke[7], tension = ke[5], stiff = ke[6] * Ld;
-    for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], w * (tension * dg[k] + stiff * vg[k]));
+    V out[2];
+    edge_product(ke, at(v, q) - at(v, p), out);
+    for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], out[k]);
   };
   auto triple = [&](int64_t s, int64_t pos) {
     int64_t ids[3];
@@ -171,9 +155,10 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
       kept_gradients(c_.triple_width[s] * k_slope_[L.moment() - fo + s] / c_.triple_rest[s], g, 3, kg);
     }
-    const V g[3] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7)};
-    const double stiff = kg[0] * along(g, ids, 3, v);
-    for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], stiff * g[k]);
+    const V vk[3] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2])};
+    V out[3];
+    kept_gradient_product<3>(kg, vk, out);
+    for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], out[k]);
   };
   auto shear = [&](int64_t s, int64_t pos) {
     double mine[kKgCell];
@@ -186,9 +171,10 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       shear_cell<double, false>(a.x, g);
       kept_gradients(c_.shear_area[s] * k_slope_[L.shear() - fo + s], g, 4, kg);
     }
-    const V g[4] = {load3<double>(kg + 1), load3<double>(kg + 4), load3<double>(kg + 7), load3<double>(kg + 10)};
-    const double stiff = kg[0] * along(g, ids, 4, v);
-    for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], stiff * g[k]);
+    const V vk[4] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2]), at(v, ids[3])};
+    V out[4];
+    kept_gradient_product<4>(kg, vk, out);
+    for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], out[k]);
   };
   // A particle's contact force, its size and slope (size 0 where it does
   // not touch), and its mass term's coefficient; kept by row (rows_), so
@@ -281,15 +267,10 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (!settled) edge_numbers(s, pos, z, ke);
-    const V u = ke[4] * load3<double>(ke);  // dk/dx = -u, u: the same |.|^2
-    const double d = ke[7] * (ke[5] / ke[3] + ke[6] * dot(u, u) / 3);
-    buf_e_[kEdgeSlot * pos] = buf_e_[kEdgeSlot * pos + 3] = d;
+    buf_e_[kEdgeSlot * pos] = buf_e_[kEdgeSlot * pos + 3] = edge_diagonal(ke);
   };
   auto gradients = [](const double* kg, double* buf, int n) {
-    for (int k = 0; k < n; ++k) {
-      const V g = load3<double>(kg + 1 + 3 * k);
-      buf[3 * k] = kg[0] * dot(g, g) / 3;
-    }
+    for (int k = 0; k < n; ++k) buf[3 * k] = kept_gradient_diagonal(kg, k);
   };
   auto triple = [&](int64_t s, int64_t pos) {
     double mine[kKgTriple];
