@@ -107,7 +107,7 @@ int run(int argc, char** argv) {
   app.add_option("--size", n, "particles per side")->check(CLI::Range(9, 4001));
   app.add_option("--time", time, "simulated seconds before the compared steps")->check(CLI::Range(0.0, 10.0));
   app.add_option("--dt", dt, "fixed time step, s")->check(CLI::Range(1e-6, 1e-1));
-  app.add_option("--steps", steps, "steps compared")->check(CLI::Range(1, 100000));
+  app.add_option("--steps", steps, "steps compared (0: the kernels and one solve only)")->check(CLI::Range(0, 100000));
   app.add_option("--threads", threads, "OpenMP threads")->check(CLI::Range(1, 1024));
   app.add_option("--out", out, "JSON file");
   try {
@@ -127,10 +127,11 @@ int run(int argc, char** argv) {
   kernel_times(w);
   const Cloth saved = w.cloth;
   const Model saved_model = w.model;
-  std::vector<Variant> variants = {{"jacobi", Preconditioner::Jacobi, {}}};
+  std::vector<Variant> variants;
+  if (steps > 0) variants.push_back({"jacobi", Preconditioner::Jacobi, {}});
   for (int degree : {1, 2, 3})
     for (double ratio : {4.0, 10.0, 30.0})
-      if (sweep || ratio == 10.0)
+      if (steps > 0 && (sweep || ratio == 10.0))
         variants.push_back({"multigrid-d" + std::to_string(degree) + "-r" + std::to_string(int(ratio)),
                           Preconditioner::Multigrid, MultigridSettings{degree, ratio, 100}});
   std::vector<Result> results;
