@@ -68,13 +68,13 @@ double true_residual(const BlockMatrix& K, const std::vector<double>& b, const s
 
 // CG preconditioned by one V-cycle of drape's multigrid, on the assembled K
 // (the products hypre's CG does too, so the two differ in the preconditioner).
-Result multigrid_solve(const BlockMatrix& K, const std::vector<int64_t>& ids, int n, const std::vector<double>& b,
-                       double tol, int max_it) {
-  Result res{"multigrid"};
+Result multigrid_solve(const MultigridSettings& settings, const std::string& name, const BlockMatrix& K,
+                       const std::vector<int64_t>& ids, int n, const std::vector<double>& b, double tol, int max_it) {
+  Result res{name};
   const size_t m = b.size();
   // A fresh object: the set-up timed is the whole one (patterns and values),
   // as for hypre's.
-  Multigrid mg;
+  Multigrid mg(settings);
   double t0 = omp_get_wtime();
   mg.setup(K, ids, n, n, 1);
   res.setup = omp_get_wtime() - t0;
@@ -209,7 +209,9 @@ Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::ve
 // tell BoomerAMG that the unknowns come 3 to a particle (interleaved x, y,
 // z: its default numbering of functions), coarsening by component
 // ("unknown") or by particle ("nodal", the block norm of each 3 x 3 block),
-// as suits elasticity-like operators.
+// as suits elasticity-like operators; aggressive coarsening (agg: the first
+// levels coarsened twice over, multipass interpolation) trades iterations
+// for a cheaper hierarchy; cheb: Chebyshev smoothing, as drape's multigrid.
 std::vector<AmgConfig> configs() {
   auto sys = [](HYPRE_Solver s) { HYPRE_BoomerAMGSetNumFunctions(s, 3); };
   return {
@@ -218,6 +220,17 @@ std::vector<AmgConfig> configs() {
       {"sys-pmis", [=](HYPRE_Solver s) { sys(s), HYPRE_BoomerAMGSetCoarsenType(s, 8); }},
       {"sys-st0.5", [=](HYPRE_Solver s) { sys(s), HYPRE_BoomerAMGSetStrongThreshold(s, 0.5); }},
       {"sys-agg1", [=](HYPRE_Solver s) { sys(s), HYPRE_BoomerAMGSetAggNumLevels(s, 1); }},
+      {"sys-agg2", [=](HYPRE_Solver s) { sys(s), HYPRE_BoomerAMGSetAggNumLevels(s, 2); }},
+      {"sys-agg1-pmis", [=](HYPRE_Solver s) {
+         sys(s), HYPRE_BoomerAMGSetAggNumLevels(s, 1), HYPRE_BoomerAMGSetCoarsenType(s, 8);
+       }},
+      {"sys-agg1-st0.5", [=](HYPRE_Solver s) {
+         sys(s), HYPRE_BoomerAMGSetAggNumLevels(s, 1), HYPRE_BoomerAMGSetStrongThreshold(s, 0.5);
+       }},
+      {"default-agg1", [](HYPRE_Solver s) { HYPRE_BoomerAMGSetAggNumLevels(s, 1); }},
+      {"sys-agg1-cheb", [=](HYPRE_Solver s) {
+         sys(s), HYPRE_BoomerAMGSetAggNumLevels(s, 1), HYPRE_BoomerAMGSetRelaxType(s, 16);
+       }},
       {"nodal-frob", [=](HYPRE_Solver s) { sys(s), HYPRE_BoomerAMGSetNodal(s, 1); }},
       {"nodal-rowsum", [=](HYPRE_Solver s) { sys(s), HYPRE_BoomerAMGSetNodal(s, 4); }},
       {"nodal-frob-pmis", [=](HYPRE_Solver s) {
@@ -225,6 +238,9 @@ std::vector<AmgConfig> configs() {
        }},
       {"nodal-frob-st0.5", [=](HYPRE_Solver s) {
          sys(s), HYPRE_BoomerAMGSetNodal(s, 1), HYPRE_BoomerAMGSetStrongThreshold(s, 0.5);
+       }},
+      {"nodal-frob-agg1", [=](HYPRE_Solver s) {
+         sys(s), HYPRE_BoomerAMGSetNodal(s, 1), HYPRE_BoomerAMGSetAggNumLevels(s, 1);
        }},
   };
 }
@@ -305,21 +321,38 @@ int run(int argc, char** argv) {
                 r.total() / product, r.residual, r.converged ? "" : "  NOT CONVERGED");
     std::fflush(stdout);
   };
-  keep_best([&] { return multigrid_solve(K, ids, w.cloth.grid.ni, b, tol, max_it); });
+  // The default settings (Newton's), then the smoother's other degrees: the
+  // BoomerAMG rows are tuned too.
+  for (int degree : {2, 1, 3}) {
+    MultigridSettings ms;
+    ms.degree = degree;
+    const std::string name = degree == MultigridSettings{}.degree ? "multigrid" : "multigrid-d" + std::to_string(degree);
+    keep_best([&] { return multigrid_solve(ms, name, K, ids, w.cloth.grid.ni, b, tol, max_it); });
+  }
   for (const AmgConfig& c : configs())
     if (only.empty() || c.name.find(only) != std::string::npos)
       keep_best([&] { return boomeramg_solve(c, K, b, tol, max_it); });
   HYPRE_Finalize();
 
-  // The fastest BoomerAMG (converged) against the multigrid, set-up included.
-  const Result& mg = results.front();
-  const Result* amg = nullptr;
-  for (size_t k = 1; k < results.size(); ++k)
-    if (results[k].converged && (!amg || results[k].total() < amg->total())) amg = &results[k];
-  if (amg)
-    std::printf("fastest BoomerAMG: %s, %.4f s a solve against the multigrid's %.4f s: %s faster by %.2fx\n",
-                amg->name.c_str(), amg->total(), mg.total(), amg->total() < mg.total() ? "BoomerAMG" : "multigrid",
-                std::max(amg->total(), mg.total()) / std::min(amg->total(), mg.total()));
+  // Default against default, and the fastest (converged) of each family,
+  // set-up included.
+  auto fastest = [&](const std::string& family) {
+    const Result* best = nullptr;
+    for (const Result& r : results)
+      if (r.name.rfind(family, 0) == 0 && r.converged && (!best || r.total() < best->total())) best = &r;
+    return best;
+  };
+  auto compare = [&](const char* what, const Result* mg, const Result* amg) {
+    if (!mg || !amg) return;
+    std::printf("%s: %s %.4f s a solve, %s %.4f s: %s faster by %.2fx\n", what, mg->name.c_str(), mg->total(),
+                amg->name.c_str(), amg->total(), amg->total() < mg->total() ? "BoomerAMG" : "multigrid",
+                std::max(amg->total(), mg->total()) / std::min(amg->total(), mg->total()));
+  };
+  const Result* amg_default = nullptr;
+  for (const Result& r : results)
+    if (r.name == "boomeramg-default" && r.converged) amg_default = &r;
+  compare("defaults", results.front().converged ? &results.front() : nullptr, amg_default);
+  compare("fastest", fastest("multigrid"), fastest("boomeramg"));
 
   if (!json.empty()) {
     Json j;
