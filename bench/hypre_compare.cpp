@@ -128,12 +128,15 @@ Result multigrid_solve(const MultigridSettings& settings, const std::string& nam
 struct AmgConfig {
   std::string name;
   std::function<void(HYPRE_Solver)> set;
+  bool rotations = false;  // the rigid rotations as interpolation vectors
 };
 
 // CG (hypre's) preconditioned by one BoomerAMG V-cycle. The set-up timed
 // includes copying K into hypre's IJ matrix: hypre needs its own copy.
-Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::vector<double>& b, double tol,
-                       int max_it) {
+// pos: the particles' positions about their centroid, 3 a row (the rigid
+// rotations' vectors).
+Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::vector<double>& b,
+                       const std::vector<double>& pos, double tol, int max_it) {
   Result res{"boomeramg-" + cfg.name};
   const HYPRE_Int m = HYPRE_Int(b.size());
   const double w0 = omp_get_wtime();
@@ -190,6 +193,33 @@ Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::ve
   HYPRE_BoomerAMGSetMaxIter(amg, 1);  // one V-cycle a preconditioning
   HYPRE_BoomerAMGSetTol(amg, 0.0);
   cfg.set(amg);
+  // Rotations about x, y and z: with the translations (one a function, which
+  // nodal coarsening interpolates already) the near null space of a stiffness
+  // without its mass term.
+  std::vector<HYPRE_IJVector> rot;
+  std::vector<HYPRE_ParVector> parrot;
+  if (cfg.rotations) {
+    std::vector<double> v(m);
+    for (int a = 0; a < 3; ++a) {
+      const int i = (a + 1) % 3, j = (a + 2) % 3;  // rotation about a: (e_a x p)
+      for (HYPRE_Int r = 0; r < m / 3; ++r) {
+        v[3 * r + a] = 0;
+        v[3 * r + i] = -pos[3 * r + j];
+        v[3 * r + j] = pos[3 * r + i];
+      }
+      HYPRE_IJVector iv;
+      HYPRE_IJVectorCreate(MPI_COMM_WORLD, 0, m - 1, &iv);
+      HYPRE_IJVectorSetObjectType(iv, HYPRE_PARCSR);
+      HYPRE_IJVectorInitialize(iv);
+      HYPRE_IJVectorSetValues(iv, m, rows.data(), v.data());
+      HYPRE_IJVectorAssemble(iv);
+      HYPRE_ParVector pv;
+      HYPRE_IJVectorGetObject(iv, (void**)&pv);
+      rot.push_back(iv);
+      parrot.push_back(pv);
+    }
+    HYPRE_BoomerAMGSetInterpVectors(amg, HYPRE_Int(parrot.size()), parrot.data());
+  }
   HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &pcg);
   HYPRE_PCGSetTol(pcg, tol);
   HYPRE_PCGSetTwoNorm(pcg, 1);  // |r| / |b|, as drape's CG; the default is the preconditioned norm
@@ -213,6 +243,7 @@ Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::ve
 
   HYPRE_ParCSRPCGDestroy(pcg);
   HYPRE_BoomerAMGDestroy(amg);
+  for (HYPRE_IJVector iv : rot) HYPRE_IJVectorDestroy(iv);
   HYPRE_IJVectorDestroy(bv);
   HYPRE_IJVectorDestroy(xv);
   HYPRE_IJMatrixDestroy(A);
@@ -227,7 +258,9 @@ Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::ve
 // ("unknown") or by particle ("nodal", the block norm of each 3 x 3 block),
 // as suits elasticity-like operators; aggressive coarsening (agg: the first
 // levels coarsened twice over, multipass interpolation) trades iterations
-// for a cheaper hierarchy; cheb: Chebyshev smoothing, as drape's multigrid.
+// for a cheaper hierarchy; cheb: Chebyshev smoothing, as drape's multigrid;
+// rbm: the rigid rotations added to nodal interpolation (hypre's "GM
+// variant 2", for elasticity), with ext+i or classical interpolation.
 std::vector<AmgConfig> configs() {
   auto sys = [](HYPRE_Solver s) { HYPRE_BoomerAMGSetNumFunctions(s, 3); };
   return {
@@ -258,6 +291,14 @@ std::vector<AmgConfig> configs() {
       {"nodal-frob-agg1", [=](HYPRE_Solver s) {
          sys(s), HYPRE_BoomerAMGSetNodal(s, 1), HYPRE_BoomerAMGSetAggNumLevels(s, 1);
        }},
+      {"nodal-rbm", [=](HYPRE_Solver s) {
+         sys(s), HYPRE_BoomerAMGSetNodal(s, 4), HYPRE_BoomerAMGSetInterpVecVariant(s, 2),
+             HYPRE_BoomerAMGSetInterpVecQMax(s, 4);
+       }, true},
+      {"nodal-rbm-classical", [=](HYPRE_Solver s) {
+         sys(s), HYPRE_BoomerAMGSetNodal(s, 4), HYPRE_BoomerAMGSetInterpVecVariant(s, 2),
+             HYPRE_BoomerAMGSetInterpVecQMax(s, 4), HYPRE_BoomerAMGSetInterpType(s, 0);
+       }, true},
   };
 }
 
@@ -315,6 +356,12 @@ int run(int argc, char** argv) {
   const std::vector<double>& rho = ev.residual();
   for (size_t r = 0; r < ids.size(); ++r)
     for (int k = 0; k < 3; ++k) b[3 * r + k] = -rho[3 * ids[r] + k];
+  std::vector<double> pos(3 * ids.size());
+  double centroid[3] = {};
+  for (size_t r = 0; r < ids.size(); ++r)
+    for (int k = 0; k < 3; ++k) centroid[k] += z[3 * ids[r] + k] / double(ids.size());
+  for (size_t r = 0; r < ids.size(); ++r)
+    for (int k = 0; k < 3; ++k) pos[3 * r + k] = z[3 * ids[r] + k] - centroid[k];
   std::printf("size %d, t = %.4f s after %.1f s of stepping: %zu free particles, %lld blocks; "
               "stiffness product %.3f ms (CPU), K assembled %.2f products (not in the set-ups: both need it)\n",
               n, w.cloth.time, stepping, ids.size(), (long long)K.blocks(), 1e3 * product, assemble / product);
@@ -332,7 +379,7 @@ int run(int argc, char** argv) {
     }
     results.push_back(best);
     const Result& r = results.back();
-    std::printf("%-26s set-up %8.4f s (%7.1f products)  solve %8.4f s (%7.1f products)  iterations %4d  "
+    std::printf("%-30s set-up %8.4f s (%7.1f products)  solve %8.4f s (%7.1f products)  iterations %4d  "
                 "total %8.4f s (%7.1f products)  wall %8.4f s  |r|/|b| %.2e%s\n",
                 r.name.c_str(), r.setup, r.setup / product, r.solve, r.solve / product, r.iterations, r.total(),
                 r.total() / product, r.wall, r.residual, r.converged ? "" : "  NOT CONVERGED");
@@ -348,7 +395,7 @@ int run(int argc, char** argv) {
   }
   for (const AmgConfig& c : configs())
     if (only.empty() || c.name.find(only) != std::string::npos)
-      keep_best([&] { return boomeramg_solve(c, K, b, tol, max_it); });
+      keep_best([&] { return boomeramg_solve(c, K, b, pos, tol, max_it); });
   HYPRE_Finalize();
 
   // Default against default, and the fastest (converged) of each family,
