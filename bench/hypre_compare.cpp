@@ -7,7 +7,8 @@
 // two is measured on this machine. One rank (hypre's IJ interface on
 // MPI_COMM_WORLD), one thread (Debian's hypre is built without OpenMP).
 // Figures at 129, 257 and 513: bench/hypre-compare/.
-//   hypre_compare [--size 129] [--time 0.12] [--dt 5e-4] [--tol 1e-6] [--repeat 1] [--json FILE]
+//   hypre_compare [--size 129] [--time 0.12] [--dt 5e-4] [--tol 1e-6] [--max-iterations 1000]
+//                 [--repeat 1] [--only NAME-PART] [--json FILE]
 #include <mpi.h>
 #include <omp.h>
 
