@@ -28,8 +28,7 @@
 #include <vector>
 
 #include "io/json.hpp"
-#include "io/kes.hpp"
-#include "solver/world.hpp"
+#include "landing_state.hpp"
 
 namespace drape {
 namespace {
@@ -47,27 +46,6 @@ struct Result {
 // This thread's CPU seconds: the machine may be shared, and wall-clock
 // times of the same solve varied twofold there; every solve here runs on
 // this one thread (OpenMP set to 1, hypre built without it).
-double cpu_seconds() {
-  timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
-// CPU seconds per call, by repetition for about 0.2 s.
-template <class F>
-double per_call(F&& f) {
-  f();
-  int reps = 0;
-  const double t0 = cpu_seconds();
-  double t = t0;
-  while (t - t0 < 0.2) {
-    f();
-    ++reps;
-    t = cpu_seconds();
-  }
-  return (t - t0) / reps;
-}
-
 double dot(const std::vector<double>& a, const std::vector<double>& b) {
   double s = 0;
   for (size_t k = 0; k < a.size(); ++k) s += a[k] * b[k];
@@ -330,15 +308,10 @@ int run(int argc, char** argv) {
   }
   omp_set_num_threads(1);  // as hypre: the comparison is per core
 
-  Scene scene;
-  scene.cloth.particles = {n, n};
-  scene.amrc.start_spacing = 0;
-  scene.solver.dt = scene.solver.dt_min = scene.solver.dt_max = dt;
-  scene.solver.preconditioner = Preconditioner::Jacobi;
+  const Scene scene = landing_scene(n, dt);
   World w(scene, load_fabric(scene.cloth.fabric));
-  Timers tm;
   const double s0 = omp_get_wtime();
-  while (w.cloth.time < time - 0.5 * dt) w.loop->step(tm);
+  step_to(w, time);
   const double stepping = omp_get_wtime() - s0;
 
   // The state's K and b, in the particle list's order (the compact order of

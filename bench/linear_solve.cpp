@@ -3,6 +3,7 @@
 // dt) to --time, then every variant runs the next --steps steps from that
 // state, and the linear iterations, Newton iterations and seconds per phase
 // are reported side by side (ratios from one run).
+// Kernel timings are the calling thread's CPU seconds (one thread by default).
 //   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--sweep] [--out FILE.json]
 #include <omp.h>
 
@@ -17,8 +18,7 @@
 #include <vector>
 
 #include "io/json.hpp"
-#include "io/kes.hpp"
-#include "solver/world.hpp"
+#include "landing_state.hpp"
 
 namespace drape {
 namespace {
@@ -34,21 +34,6 @@ struct Result {
   int linear = 0, newton = 0, unconverged = 0, levels = 0;
   double seconds = 0, cpu = 0, precondition = 0, setup = 0, products = 0;
 };
-
-// Seconds per call, by repetition for about 0.2 s.
-template <class F>
-double per_call(F&& f) {
-  f();
-  int reps = 0;
-  const double t0 = omp_get_wtime();
-  double t = t0;
-  while (t - t0 < 0.2) {
-    f();
-    ++reps;
-    t = omp_get_wtime();
-  }
-  return (t - t0) / reps;
-}
 
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
@@ -116,14 +101,9 @@ int run(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   omp_set_num_threads(threads);
-  Scene scene;
-  scene.cloth.particles = {n, n};
-  scene.amrc.start_spacing = 0;
-  scene.solver.dt = scene.solver.dt_min = scene.solver.dt_max = dt;
-  scene.solver.preconditioner = Preconditioner::Jacobi;
+  const Scene scene = landing_scene(n, dt);
   World w(scene, load_fabric(scene.cloth.fabric));
-  Timers tm;
-  while (w.cloth.time < time - 0.5 * dt) w.loop->step(tm);
+  step_to(w, time);
   kernel_times(w);
   const Cloth saved = w.cloth;
   const Model saved_model = w.model;

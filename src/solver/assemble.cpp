@@ -16,6 +16,10 @@
 namespace drape {
 
 namespace {
+// The slot at position pos of an element list (the ring's after this rank's).
+inline int64_t slot_at(const ActiveList& own, const ActiveList& ring, int64_t pos) {
+  return pos < own.size() ? own.items[pos] : ring.items[pos - own.size()];
+}
 // One column's share of a row's term: the row it lands in and its weight.
 struct Share {
   int32_t row;
@@ -107,8 +111,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
         if (at[k] >= 0) {
           const int64_t pos = at[k] / kEdgeSlot, part = (at[k] % kEdgeSlot) / 3;
           const double* ke = &kg_e_[kKgEdge * pos];
-          const int64_t s = pos < lists_.edges.size() ? lists_.edges.items[pos]
-                                                       : lists_.ring_edges.items[pos - lists_.edges.size()];
+          const int64_t s = slot_at(lists_.edges, lists_.ring_edges, pos);
           const int64_t ends[2] = {s >> 1, nb_e_[pos]};
           const double u[3] = {ke[0] * ke[4], ke[1] * ke[4], ke[2] * ke[4]};
           const double a = ke[7] * ke[5] * ke[4], b = ke[7] * ke[6] - a;
@@ -122,20 +125,16 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       for (int k = 2; k < 5; ++k)
         if (at[k] >= 0) {
           const int64_t pos = at[k] / kTripleSlot, part = (at[k] % kTripleSlot) / 3;
-          const int64_t s = pos < lists_.triples.size() ? lists_.triples.items[pos]
-                                                         : lists_.ring_triples.items[pos - lists_.triples.size()];
           int64_t ids[3];
-          triple_ids(s, pos, ids);
+          triple_ids(slot_at(lists_.triples, lists_.ring_triples, pos), pos, ids);
           rank_one(&kg_t_[kKgTriple * pos], 3, int(part), ids, w, columns);
         }
     }
     for (int k = 0; k < 4; ++k)
       if (at[k] >= 0) {
         const int64_t pos = at[k] / kShearSlot, part = (at[k] % kShearSlot) / 3;
-        const int64_t s = pos < lists_.shears.size() ? lists_.shears.items[pos]
-                                                      : lists_.ring_shears.items[pos - lists_.shears.size()];
         int64_t ids[4];
-        cell_ids(s, pos, ids);
+        cell_ids(slot_at(lists_.shears, lists_.ring_shears, pos), pos, ids);
         rank_one(&kg_s_[kKgCell * pos], 4, int(part), ids, w, columns);
       }
   };
