@@ -175,7 +175,8 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   const int64_t end = c_.layout.tension();  // the positions: Newton's unknowns
   if (dots_.unknowns_below(end) > int64_t(zt_.size()))  // 3 per owned particle at most
     throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
-  mg_solves_ = 0;  // a new step (or a retry): the V-cycle is built afresh
+  mg_solves_ = 0;  // a new step (or a retry): the V-cycle is built afresh,
+  mg_.forget();    // from this step's K alone (restarts stay bitwise)
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;

@@ -42,6 +42,12 @@ class Multigrid {
   // The point sets and patterns are rebuilt when `stamp` (the particle
   // lists') changes; the values every call. A0 must outlive the next apply.
   void setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp);
+  // The next setup carries nothing over from earlier ones (the smoothers'
+  // eigenvector estimates): a run restarted at a step builds what the
+  // uninterrupted run built there.
+  void forget() {
+    for (Level& l : levels_) l.smoother.forget();
+  }
   // x = M^-1 r: one V-cycle from x = 0 (3 doubles a row of A0).
   void apply(const double* r, double* x);
   int levels() const { return int(levels_.size()); }

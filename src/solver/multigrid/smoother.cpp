@@ -38,9 +38,11 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
     ok = ok && a && invert_block(a, &dinv_[9 * i]);
   }
   if (!ok) throw std::runtime_error("multigrid: a particle's diagonal block is singular");
-  // Power iteration on D^-1 A: from a fixed start on a new pattern, else
-  // from the last set-up's vector (the operator moved a little): a few
-  // steps find lmax to within tens of percent, which the margin absorbs.
+  // Power iteration on D^-1 A: from a fixed start after forget() or on a new
+  // pattern (12 steps), else from the last set-up's vector (the operator
+  // moved a little: 3 steps). Too few steps from a cold start underestimate
+  // lmax, and the polynomial then amplifies the spectrum's top (6 steps at
+  // 129 x 129 took a solve from 30 iterations to 237).
   int steps = 3;
   if (eig_.size() != size_t(3 * n)) {
     eig_.resize(size_t(3 * n));

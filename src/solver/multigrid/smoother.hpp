@@ -19,6 +19,8 @@ class Chebyshev {
   // x improved towards A x = b (x = 0 on entry when `zero`).
   void smooth(const BlockMatrix& A, const double* b, double* x, bool zero);
   double lambda_max() const { return lmax_; }
+  // The next setup estimates lmax from scratch (no history carried).
+  void forget() { eig_.clear(); }
 
  private:
   void apply_dinv(const double* r, double* out) const;
