@@ -236,6 +236,32 @@ def reference_machine(segments):
     return spent.most_common(1)[0][0]
 
 
+def table_row(fine, name, path, r, ref_x, ref_cost, width):
+    """One row of the table: the run in `path` (report r) against the finest
+    drape ref_x (its final positions) and cost ref_cost."""
+    x = on_grid(final_positions(path), fine)
+    rms = float(np.sqrt(np.mean(np.sum((x - ref_x) ** 2, axis=2)))) / width
+    surface = float(np.sqrt(np.mean(surface_distance(x, ref_x) ** 2))) / width
+    pa = r["particles_active"]
+    return {
+        "size": fine, "mesh": name, "ledger_row": ledger_row(path), "grid": r["grid"],
+        "wall_seconds": r["wall_seconds"],
+        "particles_min": pa["min"], "particles_max": pa["max"],
+        # active particles per CG iteration (reports before it existed: the final count)
+        "particles_mean": pa["mean"] if "mean" in pa else pa["final"], "iterations": r["iterations"],
+        "quality_error_cost": (r["final_cost"]["total"] - ref_cost) / ref_cost if ref_cost else 0.0,
+        # the same material points' distance, and the distance to the finest surface
+        "quality_error_geometric": rms, "quality_error_surface": surface,
+        "max_penetration": r["max_penetration"],
+        "simulated_seconds": r["simulated_seconds"], "steps": r["steps"], "at_rest": r["at_rest"],
+        # steps accepted at the iteration limit: a row's drape is only as good as
+        # its steps converged (counted over restarts; reports before it existed: None)
+        "unconverged_steps": r.get("unconverged_steps"),
+        # kinks at the mesh spacing in the final state (reports before it existed: none)
+        "zigzag_share": r.get("zigzag", {}).get("share"),
+    }
+
+
 def main():
     args = sys.argv[1:]
     if args[:1] == ["--state"] and len(args) == 2:
@@ -265,45 +291,28 @@ def main():
         ref_cost = reports["finest"]["final_cost"]["total"]
         width = cloth_width(runs[0][1])
         pictures.append((fine, runs, ref_x, width))
-        for name, path, n in runs:
-            r = reports[name]
-            x = on_grid(final_positions(path), fine)
-            rms = float(np.sqrt(np.mean(np.sum((x - ref_x) ** 2, axis=2)))) / width
-            surface = float(np.sqrt(np.mean(surface_distance(x, ref_x) ** 2))) / width
-            pa = r["particles_active"]
-            rows.append({
-                "size": fine, "mesh": name, "ledger_row": ledger_row(path), "grid": r["grid"],
-                "wall_seconds": r["wall_seconds"],
-                "particles_min": pa["min"], "particles_max": pa["max"],
-                # active particles per CG iteration (reports before it existed: the final count)
-                "particles_mean": pa.get("mean", pa["final"]), "iterations": r["iterations"],
-                "quality_error_cost": (r["final_cost"]["total"] - ref_cost) / ref_cost if ref_cost else 0.0,
-                # the same material points' distance, and the distance to the finest surface
-                "quality_error_geometric": rms, "quality_error_surface": surface,
-                "max_penetration": r["max_penetration"],
-                "simulated_seconds": r["simulated_seconds"], "steps": r["steps"], "at_rest": r["at_rest"],
-                # kinks at the mesh spacing in the final state (reports before it existed: none)
-                "zigzag_share": r.get("zigzag", {}).get("share"),
-            })
+        for name, path, _ in runs:
+            rows.append(table_row(fine, name, path, reports[name], ref_x, ref_cost, width))
     if ledger is not None:
         apply_ledger(rows, ledger)
     json.dump({"rows": rows}, open(f"{out}/table1.json", "w"), indent=1)
-    print("%-5s %-9s %10s %8s %8s %15s %8s %10s %9s %9s %11s %7s" % (
+    print("%-5s %-9s %10s %8s %8s %15s %8s %10s %9s %9s %11s %7s %7s" % (
         "size", "mesh", "grid", "wall [s]", "t [s]", "particles", "mean", "cost err", "geom err", "surf err",
-        "penetr. [m]", "zigzag"))
+        "penetr. [m]", "zigzag", "unconv"))
     for r in rows:
         parts = str(r["particles_min"]) if r["particles_min"] == r["particles_max"] else \
             "%d-%d" % (r["particles_min"], r["particles_max"])
         zz = "-" if r["zigzag_share"] is None else "%.3f" % r["zigzag_share"]
         wall = "-" if r["wall_seconds"] is None else "%.1f" % r["wall_seconds"]
-        print("%-5d %-9s %10s %8s %8.3f%s %15s %8.0f %+10.3f %9.4f %9.4f %11.2g %7s" % (
+        unconv = "-" if r["unconverged_steps"] is None else str(r["unconverged_steps"])
+        print("%-5d %-9s %10s %8s %8.3f%s %15s %8.0f %+10.3f %9.4f %9.4f %11.2g %7s %7s" % (
             r["size"], r["mesh"], "%dx%d" % tuple(r["grid"]), wall, r["simulated_seconds"],
             "*" if r["at_rest"] else " ", parts, r["particles_mean"], r["quality_error_cost"],
-            r["quality_error_geometric"], r["quality_error_surface"], r["max_penetration"], zz))
+            r["quality_error_geometric"], r["quality_error_surface"], r["max_penetration"], zz, unconv))
     print("(t: simulated seconds, * at rest; mean: active particles per CG iteration; geom err: RMS\n"
           " distance from the same material point of the finest drape, surf err: from the finest drape's\n"
           " surface, both per cloth width; zigzag: share of neighbouring turns on the mesh lines that kink\n"
-          " at the mesh spacing, report.json zigzag)")
+          " at the mesh spacing, report.json zigzag; unconv: steps accepted unconverged)")
     for size in sorted({r["size"] for r in rows}):
         f, a, c = (next(r for r in rows if r["size"] == size and r["mesh"] == m)
                    for m in ("finest", "AMRC", "coarsest"))

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -74,8 +75,14 @@ World random_world(unsigned seed, bool amrc = false) {
   return w;
 }
 
-double term_cost(World& w, std::vector<double>& z) {
-  return w.loop->evaluator().evaluate(z.data(), nullptr).total();
+CostTerms term_cost(World& w, std::vector<double>& z) { return w.loop->evaluator().evaluate(z.data(), nullptr); }
+
+// (cp - cm) / 2h summed term by term: each difference then rounds at its own
+// term's size, not at the total's (the tensions' share of the cost is
+// orders of magnitude above what a moment or shear force moves).
+double difference(const CostTerms& cp, const CostTerms& cm, double h) {
+  return ((cp.newton - cm.newton) + (cp.stretch - cm.stretch) + (cp.bend - cm.bend) + (cp.shear - cm.shear)) /
+         (2 * h);
 }
 
 // Central difference of the whole cost, unknown by unknown.
@@ -85,7 +92,7 @@ std::vector<double> central_difference(World& w) {
   auto scale = [&](int64_t k) {
     if (k < L.tension()) return w.cloth.grid.hi;
     if (k < L.moment()) return 10.0;
-    if (k < L.shear()) return 1e-3;
+    if (k < L.shear()) return 0.1;  // steps of 1e-7 N*m/m: a finer one rounds to noise
     return 1.0;
   };
   std::vector<char> unknown(z.size(), 0);
@@ -98,11 +105,11 @@ std::vector<double> central_difference(World& w) {
     if (!unknown[k]) continue;
     const double h = 1e-6 * scale(int64_t(k)), z0 = z[k];
     z[k] = z0 + h;
-    const double cp = term_cost(w, z);
+    const CostTerms cp = term_cost(w, z);
     z[k] = z0 - h;
-    const double cm = term_cost(w, z);
+    const CostTerms cm = term_cost(w, z);
     z[k] = z0;
-    g[k] = (cp - cm) / (2 * h);
+    g[k] = difference(cp, cm, h);
   }
   return g;
 }
@@ -113,14 +120,30 @@ double max_abs(const std::vector<double>& v) {
   return m;
 }
 
-double relative_error(const std::vector<double>& a, const std::vector<double>& b) {
-  double e = 0;
-  size_t worst = 0;
-  for (size_t k = 0; k < a.size(); ++k)
-    if (std::fabs(a[k] - b[k]) > e) e = std::fabs(a[k] - b[k]), worst = k;
-  if (getenv("DRAPE_DEBUG_GRADIENT"))
-    printf("worst unknown %zu: analytic %.10g numeric %.10g (max %.3g)\n", worst, a[worst], b[worst], max_abs(a));
-  return e / max_abs(a);
+const char* const kBlocks[4] = {"positions", "tensions", "moments", "shear forces"};
+
+// The worst error of b against a in each block of unknowns (positions,
+// tensions, moments, shear forces), relative to the largest entry of a or b
+// in that block: the blocks differ by orders of magnitude, so a global
+// maximum would let an error in the smaller blocks pass unseen (and a block
+// a leaves at zero where b is not counts as an error of 1).
+std::array<double, 4> block_errors(const World& w, const std::vector<double>& a, const std::vector<double>& b) {
+  const Layout& L = w.cloth.layout;
+  const int64_t edges[5] = {0, L.tension(), L.moment(), L.shear(), L.size()};
+  std::array<double, 4> out{};
+  for (int blk = 0; blk < 4; ++blk) {
+    double e = 0, scale = 0;
+    int64_t at = edges[blk];
+    for (int64_t k = edges[blk]; k < edges[blk + 1]; ++k) {
+      scale = std::max({scale, std::fabs(a[k]), std::fabs(b[k])});
+      if (std::fabs(a[k] - b[k]) > e) e = std::fabs(a[k] - b[k]), at = k;
+    }
+    out[blk] = scale > 0 ? e / scale : 0.0;
+    if (getenv("DRAPE_DEBUG_GRADIENT"))
+      printf("%s: worst unknown %lld: analytic %.10g numeric %.10g (block max %.3g): %.3g\n", kBlocks[blk],
+             (long long)at, a[at], b[at], scale, out[blk]);
+  }
+  return out;
 }
 
 class GradientTerm : public ::testing::TestWithParam<Term> {};
@@ -142,7 +165,8 @@ TEST_P(GradientTerm, AnalyticMatchesCentralDifferences) {
     ASSERT_GT(c.total(), 0.0) << t.name << ": the random state should cost something";
     ASSERT_GT(max_abs(ga), 0.0);
     const std::vector<double> gf = central_difference(w);
-    EXPECT_LE(relative_error(ga, gf), 1e-6) << t.name << ", seed " << seed;
+    const std::array<double, 4> e = block_errors(w, ga, gf);
+    for (int blk = 0; blk < 4; ++blk) EXPECT_LE(e[blk], 1e-6) << t.name << ", seed " << seed << ": " << kBlocks[blk];
   }
 }
 
@@ -164,7 +188,13 @@ TEST(Gradient, NumericModeMatchesAnalytic) {
   const CostTerms ca = w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
   const CostTerms cn = w.loop->evaluator().numeric_gradient(w.cloth.z.data(), gn.data());
   EXPECT_EQ(ca.total(), cn.total());
-  EXPECT_LE(relative_error(ga, gn), 1e-6);
+  // The mode differences each unknown's window of cost as a whole, with a
+  // step of 1e-6 of the unknown's scale: the window's tension terms, far the
+  // largest, round the moments' and shear forces' differences to a few parts
+  // in 1e4 of their blocks (7e-4 and 5e-4 here). Those blocks are held to
+  // that; positions and tensions to 1e-6.
+  const std::array<double, 4> e = block_errors(w, ga, gn), tol = {1e-6, 1e-6, 2e-3, 2e-3};
+  for (int blk = 0; blk < 4; ++blk) EXPECT_LE(e[blk], tol[blk]) << kBlocks[blk];
 }
 
 TEST(Gradient, NonUnknownsHaveZeroGradient) {

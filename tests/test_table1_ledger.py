@@ -230,6 +230,28 @@ class ResumableRows(unittest.TestCase):
         self.assertEqual(table1.ledger_segments(path), {})
 
 
+class Rows(unittest.TestCase):
+    """A row of the table from a run's report and final frame."""
+
+    def test_a_row_carries_its_unconverged_steps(self):
+        with tempfile.TemporaryDirectory() as d:
+            run = os.path.join(d, "5-amrc")
+            os.mkdir(run)
+            u = np.linspace(0, 1, 5)
+            x = np.stack(np.meshgrid(u, u, indexing="ij") + [np.full((5, 5), 0.01)], axis=2)
+            with h5py.File(os.path.join(run, "drape.h5"), "w") as f:
+                f["frames/000001/positions"] = x
+            report = {"grid": [5, 5], "wall_seconds": 1.0, "iterations": 50, "max_penetration": 0.0,
+                      "simulated_seconds": 0.1, "steps": 12, "at_rest": True, "unconverged_steps": 3,
+                      "final_cost": {"total": 2.0}, "particles_active": {"min": 9, "max": 25, "mean": 20.0}}
+            ref = x - [0, 0, 0.01]
+            row = table1.table_row(5, "AMRC", run, report, ref, 1.0, 1.0)
+            self.assertEqual(row["unconverged_steps"], 3)
+            self.assertAlmostEqual(row["quality_error_geometric"], 0.01)
+            del report["unconverged_steps"]  # a report from before the field: unknown, not 0
+            self.assertIsNone(table1.table_row(5, "AMRC", run, report, ref, 1.0, 1.0)["unconverged_steps"])
+
+
 class KeptTable(unittest.TestCase):
     """docs/data: the ledger of the Table 1 rows at 257:65 gives the times
     docs/data/table1-257.json (and docs/validation.md) state."""

@@ -26,7 +26,8 @@
 // frame: Quadrilateral topology from /mesh/quads, XYZ geometry from the
 // frame's positions, node attributes shear, active, level (scalars) and
 // tension, moment (two-component arrays: component 0 warp, 1 weft).
-// Checked with ParaView 5.11's XDMF Reader and both Xdmf3 readers.
+// Checked with ParaView 5.11's XDMF Reader and both Xdmf3 readers; ctest
+// xdmf_paraview_np2 reads it with pvbatch against drape.h5.
 #include <hdf5.h>
 
 #include <charconv>
