@@ -32,7 +32,6 @@
 #include <charconv>
 #include <filesystem>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -40,6 +39,7 @@
 #include <vector>
 
 #include "decomp/collective.hpp"
+#include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/h5.hpp"
 #include "io/output.hpp"
@@ -177,24 +177,6 @@ class XdmfWriter {
       << "    </Attribute>\n";
   }
 };
-
-// Writes `text` to path.tmp and renames it to path.
-void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("cannot write " + tmp);
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp + " to " + path);
-  }
-}
 
 }  // namespace
 
