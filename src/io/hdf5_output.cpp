@@ -42,12 +42,9 @@
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/h5.hpp"
+#include "io/version.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
-
-#ifndef DRAPE_VERSION
-#define DRAPE_VERSION "unknown"
-#endif
 
 namespace drape {
 
