@@ -650,11 +650,24 @@ bool is_path(const std::string& s) {
          (s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0);
 }
 
+// An installed program's data: DRAPE_DATA_FROM_BIN (share/drape/data, seen
+// from bin/) next to the running executable, wherever the prefix was moved.
+// Empty when there is none, as for a program run from the build tree.
+std::string installed_data_directory() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);  // Linux
+  if (ec) return "";
+  const fs::path data = (exe.parent_path() / DRAPE_DATA_FROM_BIN).lexically_normal();
+  return fs::is_directory(data / "kes", ec) ? data.string() : "";
+}
+
 }  // namespace
 
 std::string kes_directory() {
   const char* env = std::getenv("DRAPE_DATA");
   if (env && *env) return std::string(env) + "/kes";
+  const std::string installed = installed_data_directory();
+  if (!installed.empty()) return installed + "/kes";
   return DRAPE_DATA_DIR "/kes";
 }
 
