@@ -11,7 +11,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -27,6 +26,7 @@
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "app/signals.hpp"
+#include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/json.hpp"
 #include "io/output.hpp"
@@ -68,16 +68,6 @@ FrameView frame_of(const Cloth& c, const std::vector<Block>& owned) {
   f.level = c.level.data();
   f.owned = owned;
   return f;
-}
-
-void write_text_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << text << "\n";
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-  }
-  fs::rename(tmp, path);
 }
 
 // Test hook (fault injection): DRAPE_FAULT_NAN_STEP=k poisons one free
@@ -448,9 +438,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
     sum.peak_rss = int64_t(red.max(double(peak_rss_bytes())));                    // collective; exact below 2^53
     if (rank == 0) {
-      write_text_atomically(opt.output_dir + "/report.json",
+      write_file_atomically(opt.output_dir + "/report.json",
                             report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
-                                        depth, loop.free_particles()));
+                                        depth, loop.free_particles()) + "\n");
       if (!opt.quiet) {
         Progress::Solved solved;
         solved.method = to_string(scene.solver.method);

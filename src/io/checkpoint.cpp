@@ -13,11 +13,8 @@
 #include "io/error.hpp"
 #include "decomp/collective.hpp"
 #include "io/h5.hpp"
+#include "io/version.hpp"
 #include "solver/checksum.hpp"
-
-#ifndef DRAPE_VERSION
-#define DRAPE_VERSION "unknown"
-#endif
 
 namespace drape {
 

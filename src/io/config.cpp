@@ -24,6 +24,7 @@
 #include <stdexcept>
 
 #include "io/error.hpp"
+#include "io/text.hpp"
 #include "solver/cloth.hpp"
 
 namespace drape {
@@ -125,21 +126,6 @@ const char* expected(Kind k) {
   return "?";
 }
 
-const char* type_name(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a floating-point number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::date: return "a date";
-    case toml::node_type::time: return "a time";
-    case toml::node_type::date_time: return "a date-time";
-    default: return "nothing";
-  }
-}
-
 // ------------------------------------------------------------ formatting --
 
 // Shortest text that reads back to exactly `v`, always a TOML float. Like
@@ -198,11 +184,6 @@ std::string quote(const std::string& text) {
   std::string msg = where.empty() ? what : where + ": " + what;
   std::replace(msg.begin(), msg.end(), '\n', ' ');
   throw InputError(msg);
-}
-
-std::string location(const toml::source_region& src) {
-  if (!src.path) return "";
-  return *src.path + ":" + std::to_string(src.begin.line);
 }
 
 size_t edit_distance(const std::string& a, const std::string& b) {
@@ -287,12 +268,6 @@ toml::table parse_scene_file(const std::string& path) {
   text << in.rdbuf();
   if (!in) fail("", "cannot read scene file '" + path + "'");
   return parse_scene_text(text.str(), path);
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
 }
 
 // "section.key=value" into the table. Strings may be bare words

@@ -33,7 +33,6 @@
 #include <charconv>
 #include <filesystem>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -41,14 +40,12 @@
 #include <vector>
 
 #include "decomp/collective.hpp"
+#include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/h5.hpp"
+#include "io/version.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
-
-#ifndef DRAPE_VERSION
-#define DRAPE_VERSION "unknown"
-#endif
 
 namespace drape {
 
@@ -178,24 +175,6 @@ class XdmfWriter {
       << "    </Attribute>\n";
   }
 };
-
-// Writes `text` to path.tmp and renames it to path.
-void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("cannot write " + tmp);
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp + " to " + path);
-  }
-}
 
 }  // namespace
 

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "io/error.hpp"
+#include "io/text.hpp"
 #include "solver/band.hpp"
 
 namespace drape {
@@ -41,30 +42,11 @@ std::string fmt_num(double v) {
   return s.str();
 }
 
-std::string at(const std::string& file, int line) {
-  return line > 0 ? file + ":" + std::to_string(line) : file;
-}
-
 [[noreturn]] void fail(const std::string& file, int line, const std::string& key,
                        const std::string& msg) {
-  std::string m = at(file, line) + ": ";
+  std::string m = location(file, line) + ": ";
   if (!key.empty()) m += "'" + key + "': ";
   throw InputError(m + msg);
-}
-
-int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
-int line_of(const toml::key& k) { return static_cast<int>(k.source().begin.line); }
-
-const char* type_name(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a float";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date/time";
-  }
 }
 
 // ---------------------------------------------------------------- units
@@ -286,13 +268,6 @@ struct CurveSpec {
 const CurveSpec kTensileCurve{"strain", &kStrain, "tension", &kForcePerWidth};
 const CurveSpec kBendingCurve{"curvature", &kCurvature, "moment", &kMoment};
 const CurveSpec kShearCurve{"angle", &kAngle, "force", &kForcePerWidth};
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
 
 std::vector<std::string> split_csv(const std::string& line) {
   std::vector<std::string> out;
@@ -675,11 +650,24 @@ bool is_path(const std::string& s) {
          (s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0);
 }
 
+// An installed program's data: DRAPE_DATA_FROM_BIN (share/drape/data, seen
+// from bin/) next to the running executable, wherever the prefix was moved.
+// Empty when there is none, as for a program run from the build tree.
+std::string installed_data_directory() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);  // Linux
+  if (ec) return "";
+  const fs::path data = (exe.parent_path() / DRAPE_DATA_FROM_BIN).lexically_normal();
+  return fs::is_directory(data / "kes", ec) ? data.string() : "";
+}
+
 }  // namespace
 
 std::string kes_directory() {
   const char* env = std::getenv("DRAPE_DATA");
   if (env && *env) return std::string(env) + "/kes";
+  const std::string installed = installed_data_directory();
+  if (!installed.empty()) return installed + "/kes";
   return DRAPE_DATA_DIR "/kes";
 }
 

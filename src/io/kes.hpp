@@ -7,8 +7,9 @@
 
 namespace drape {
 
-// The directory holding the shipped fabrics: $DRAPE_DATA/kes if set, else the
-// source tree's data/kes (compiled in as DRAPE_DATA_DIR).
+// The directory holding the shipped fabrics: $DRAPE_DATA/kes if set, else an
+// installed program's <prefix>/share/drape/data/kes found from its own
+// executable, else the source tree's data/kes (compiled in as DRAPE_DATA_DIR).
 std::string kes_directory();
 
 // `name_or_path`: a bare name ("denim-A") looks in kes_directory(); anything

@@ -11,12 +11,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "io/atomic_file.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
 
@@ -517,23 +516,6 @@ std::string encode_png(const std::vector<uint8_t>& rgb, int w, int h, const std:
   return png;
 }
 
-void write_atomically(const std::string& path, const std::string& bytes) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), std::streamsize(bytes.size()));
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("picture: cannot write " + tmp);
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("picture: cannot rename " + tmp + " to " + path);
-  }
-}
-
 }  // namespace
 
 void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std::string& path,
@@ -563,7 +545,7 @@ void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std:
   draw_floor(img, cam, fit, shadow_map({&cloth, &solid}, fit), obstacle.floor);
   draw_mesh(img, solid, cam, light);
   draw_mesh(img, cloth, cam, light);
-  write_atomically(path, encode_png(downsample(img, ss), width, height, description));
+  write_file_atomically(path, encode_png(downsample(img, ss), width, height, description));
 }
 
 }  // namespace drape
