@@ -15,12 +15,17 @@ NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots, Preconditioner p
   for (auto* v : {&pg_, &kp_, &diag_}) v->assign(n, 0.0);
 }
 
+namespace {
+// What the levels' point sets follow: the lists and their hanging particles.
+uint64_t lists_stamp(const ActiveLists& l) { return l.stamp ^ (uint64_t(l.hanging.size()) << 48); }
+}  // namespace
+
 // K assembled at z and the levels over it. The compact vectors number the
 // free particles as the particle list does (tile, then index): the
 // assembled rows' order, checked when the lists change.
 void NewtonSolver::setup_multigrid(Evaluator& ev) {
   const ActiveLists& lists = ev.lists();
-  const uint64_t stamp = lists.stamp ^ (uint64_t(lists.hanging.size()) << 48);
+  const uint64_t stamp = lists_stamp(lists);
   if (ids_.size() != size_t(lists.particles.size()) || stamp != mg_stamp_) {
     ids_.assign(lists.particles.items.begin(), lists.particles.items.end());
     bool same = true;
@@ -41,9 +46,7 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
 // changed, and when the last solve took more than twice the iterations of
 // the first solve on this build.
 bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
-  const ActiveLists& lists = ev.lists();
-  const uint64_t stamp = lists.stamp ^ (uint64_t(lists.hanging.size()) << 48);
-  return mg_solves_ == 0 || stamp != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
+  return mg_solves_ == 0 || lists_stamp(ev.lists()) != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
 }
 
 void NewtonSolver::precondition(const double* r, double* s) {
