@@ -186,6 +186,20 @@ TEST(CliBad, Flags) {
   });
 }
 
+// Finite values whose products in the physics are not: refused as input,
+// naming the key, not left to fail as a numerical error at step 1. Small
+// short runs, so that a missing guard fails fast instead of simulating.
+TEST(CliBad, OverflowingSizes) {
+  expect_all_refused({
+    {"size_area_overflows", {"--set", "cloth.size=[1e308,1e308]"}, {"--set cloth.size=[1e308,1e308]", "cloth.size", "too large"}},
+    {"size_spacing_underflows", {"--set", "cloth.size=[1e-200,1e-200]"}, {"cloth.size", "too small"}},
+    {"size_mass_overflows", {"--set", "cloth.particles=[9,9]", "--set", "cloth.size=[8e152,8e152]"},
+     {"cloth.size", "mass"}},
+    {"obstacle_size_overflows", {"--set", "obstacle.size=[1e200,1,1]", "--set", "cloth.particles=[9,9]", "--set", "solver.steps=1"}, {"--set obstacle.size", "obstacle.size"}},
+    {"obstacle_radius_overflows", {"--set", "obstacle.radius=1e300", "--set", "cloth.particles=[9,9]", "--set", "solver.steps=1"}, {"--set obstacle.radius", "obstacle.radius"}},
+  });
+}
+
 // A fabric that cannot be found, and fabric files with one bad value (made
 // from the shipped denim-A): refused naming the file, line and key.
 TEST(CliBad, Fabric) {
