@@ -200,6 +200,26 @@ TEST(CliBad, OverflowingSizes) {
   });
 }
 
+// A cloth too large for the memory a rank has: refused before anything is
+// allocated or written, saying how much it needs. The address space limit
+// stands in for a small machine.
+TEST(CliBad, TooLargeForMemory) {
+  const fs::path outdir = tmp_dir() / "too-large-out";
+  const fs::path err = tmp_dir() / "too-large.stderr";
+  const std::string cmd = "ulimit -v 8000000 && " + clean_env() + " " + sh(DRAPE_BINARY) +
+                          " --set cloth.particles=[10000,10000] --output " + sh(outdir.string()) +
+                          " </dev/null >/dev/null 2>" + sh(err.string());
+  const int rc = std::system(("/bin/sh -c " + sh(cmd)).c_str());
+  const std::string e = slurp(err);
+  ASSERT_TRUE(rc != -1 && WIFEXITED(rc)) << e;
+  EXPECT_EQ(WEXITSTATUS(rc), 2) << e;
+  EXPECT_EQ(e.rfind("drape: error: cloth.particles = [10000, 10000] needs about ", 0), 0u) << e;
+  EXPECT_NE(e.find(" GB per rank, "), std::string::npos) << e;
+  EXPECT_NE(e.find(" GB are available: use fewer particles"), std::string::npos) << e;
+  EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 1) << e;
+  EXPECT_FALSE(fs::exists(outdir)) << "output directory was created";
+}
+
 // A fabric that cannot be found, and fabric files with one bad value (made
 // from the shipped denim-A): refused naming the file, line and key.
 TEST(CliBad, Fabric) {
