@@ -192,6 +192,8 @@ TEST(CliBad, Flags) {
 TEST(CliBad, OverflowingSizes) {
   expect_all_refused({
     {"size_area_overflows", {"--set", "cloth.size=[1e308,1e308]"}, {"--set cloth.size=[1e308,1e308]", "cloth.size", "too large"}},
+    // The area overflows while the cloth's squared reach does not.
+    {"size_area_alone_overflows", {"--set", "cloth.size=[1.5e154,1.5e154]"}, {"cloth.size", "too large: the cloth's area"}},
     {"size_spacing_underflows", {"--set", "cloth.size=[1e-200,1e-200]"}, {"cloth.size", "too small"}},
     {"size_mass_overflows", {"--set", "cloth.particles=[9,9]", "--set", "cloth.size=[8e152,8e152]"},
      {"cloth.size", "mass"}},
