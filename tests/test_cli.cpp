@@ -186,6 +186,42 @@ TEST(CliBad, Flags) {
   });
 }
 
+// Finite values whose products in the physics are not: refused as input,
+// naming the key, not left to fail as a numerical error at step 1. Small
+// short runs, so that a missing guard fails fast instead of simulating.
+TEST(CliBad, OverflowingSizes) {
+  expect_all_refused({
+    {"size_area_overflows", {"--set", "cloth.size=[1e308,1e308]"}, {"--set cloth.size=[1e308,1e308]", "cloth.size", "too large"}},
+    // The area overflows while the cloth's squared reach does not.
+    {"size_area_alone_overflows", {"--set", "cloth.size=[1.5e154,1.5e154]"}, {"cloth.size", "too large: the cloth's area"}},
+    {"size_spacing_underflows", {"--set", "cloth.size=[1e-200,1e-200]"}, {"cloth.size", "too small"}},
+    {"size_mass_overflows", {"--set", "cloth.particles=[9,9]", "--set", "cloth.size=[8e152,8e152]"},
+     {"cloth.size", "mass"}},
+    {"obstacle_size_overflows", {"--set", "obstacle.size=[1e200,1,1]", "--set", "cloth.particles=[9,9]", "--set", "solver.steps=1"}, {"--set obstacle.size", "obstacle.size"}},
+    {"obstacle_radius_overflows", {"--set", "obstacle.radius=1e300", "--set", "cloth.particles=[9,9]", "--set", "solver.steps=1"}, {"--set obstacle.radius", "obstacle.radius"}},
+  });
+}
+
+// A cloth too large for the memory a rank has: refused before anything is
+// allocated or written, saying how much it needs. The address space limit
+// stands in for a small machine.
+TEST(CliBad, TooLargeForMemory) {
+  const fs::path outdir = tmp_dir() / "too-large-out";
+  const fs::path err = tmp_dir() / "too-large.stderr";
+  const std::string cmd = "ulimit -v 8000000 && " + clean_env() + " " + sh(DRAPE_BINARY) +
+                          " --set cloth.particles=[10000,10000] --output " + sh(outdir.string()) +
+                          " </dev/null >/dev/null 2>" + sh(err.string());
+  const int rc = std::system(("/bin/sh -c " + sh(cmd)).c_str());
+  const std::string e = slurp(err);
+  ASSERT_TRUE(rc != -1 && WIFEXITED(rc)) << e;
+  EXPECT_EQ(WEXITSTATUS(rc), 2) << e;
+  EXPECT_EQ(e.rfind("drape: error: cloth.particles = [10000, 10000] needs about ", 0), 0u) << e;
+  EXPECT_NE(e.find(" GB per rank, "), std::string::npos) << e;
+  EXPECT_NE(e.find(" GB are available: use fewer particles"), std::string::npos) << e;
+  EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 1) << e;
+  EXPECT_FALSE(fs::exists(outdir)) << "output directory was created";
+}
+
 // A fabric that cannot be found, and fabric files with one bad value (made
 // from the shipped denim-A): refused naming the file, line and key.
 TEST(CliBad, Fabric) {

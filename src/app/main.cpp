@@ -94,6 +94,7 @@ int main(int argc, char** argv) {
       scene = drape::load_scene(cfg, overrides);
       fabric = drape::load_fabric(scene.cloth.fabric);
     }
+    drape::check_particle_mass(scene, fabric.density, fabric.name);
     if (threads > 0) scene.parallel.threads = threads;
     const std::string toml = drape::scene_to_toml(scene);
     if (dry_run) {

@@ -23,6 +23,7 @@
 #include "decomp/decomposition.hpp"
 #include "decomp/gather.hpp"
 #include "decomp/rebalance.hpp"
+#include "app/memory.hpp"
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "app/signals.hpp"
@@ -130,6 +131,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   if (ranks > 1 && scene.solver.preconditioner == Preconditioner::Multigrid)
     throw InputError("solver.preconditioner = \"multigrid\" runs on one rank only (its levels are not "
                      "split over ranks yet); run it without mpirun or use \"jacobi\"");
+  // Before any allocation the grid sizes and before the output directory.
+  check_memory(scene, comm);
   if (scene.parallel.threads > 0) omp_set_num_threads(scene.parallel.threads);
   const int threads = omp_get_max_threads();
   const bool talk = rank == 0 && !opt.quiet;

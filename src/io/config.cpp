@@ -13,6 +13,7 @@
 #include <charconv>
 #include <climits>
 #include <cmath>
+#include <cfloat>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -529,6 +530,23 @@ void validate(const Config& cfg, const Scene& s) {
   check(int64_t(c.particles[0]) * c.particles[1] <= kMaxParticles, "cloth.particles",
         "NI x NJ must be at most " + std::to_string(kMaxParticles) + ", got " + format_array(c.particles));
   check(all_positive(c.size), "cloth.size", "sizes must be > 0, got " + format_array(c.size));
+  {
+    // Finite sizes can still overflow what the physics derives from them: the
+    // area, squared edge lengths (stretch and contact square them) and the
+    // area a particle stands for (its mass; zero would divide later).
+    const double hi = c.size[0] / (c.particles[0] - 1), hj = c.size[1] / (c.particles[1] - 1);
+    check(std::isfinite(c.size[0] * c.size[1]) && std::isfinite(hi * hi) && std::isfinite(hj * hj),
+          "cloth.size", "too large: the cloth's area or squared spacing is not a finite number, got " +
+                            format_array(c.size));
+    check(hi * hj >= DBL_MIN, "cloth.size",
+          "too small: the area per particle underflows to zero, got " + format_array(c.size));
+    const double reach = std::pow(std::fabs(c.center[0]) + 0.5 * c.size[0], 2) +
+                         std::pow(std::fabs(c.center[1]) + 0.5 * c.size[1], 2) + c.height * c.height;
+    check(std::isfinite(reach), check.given("cloth.size", "cloth.center"),
+          "too large: the cloth's squared reach from the origin is not a finite number (cloth.center " +
+              format_array(c.center) + ", cloth.height " + format_double(c.height) + ", cloth.size " +
+              format_array(c.size) + ")");
+  }
   check(!c.fabric.empty(), "cloth.fabric", "must not be empty");
   check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));
   check(c.clamp >= 0 && c.clamp < c.particles[0], "cloth.clamp",
@@ -547,6 +565,19 @@ void validate(const Config& cfg, const Scene& s) {
   const auto& o = s.obstacle;
   check(all_positive(o.size), "obstacle.size", "sizes must be > 0, got " + format_array(o.size));
   check(o.radius > 0, "obstacle.radius", "must be > 0" + got(o.radius));
+  // Contact squares distances to the obstacle: its farthest point's squared
+  // distance from the origin must stay finite.
+  double box = 0, ball = 0;
+  for (int k = 0; k < 3; ++k) {
+    box += std::pow(std::fabs(o.center[k]) + 0.5 * o.size[k], 2);
+    ball += std::pow(std::fabs(o.center[k]) + o.radius, 2);
+  }
+  check(std::isfinite(box), check.given("obstacle.size", "obstacle.center"),
+        "too large: the box's squared reach is not a finite number (obstacle.center " + format_array(o.center) +
+            ", obstacle.size " + format_array(o.size) + ")");
+  check(std::isfinite(ball), check.given("obstacle.radius", "obstacle.center"),
+        "too large: the sphere's squared reach is not a finite number (obstacle.center " +
+            format_array(o.center) + ", obstacle.radius " + format_double(o.radius) + ")");
 
   const auto& v = s.solver;
   check(v.dt > 0, "solver.dt", "must be > 0" + got(v.dt));
@@ -646,6 +677,18 @@ void check_restart_overrides(const std::vector<std::string>& overrides) {
       fail("--set " + o, key + " cannot change on --restart (the checkpoint fixes the physics); "
                           "allowed: solver.steps, solver.end_time, solver.wall_limit, output.*, parallel.*");
   }
+}
+
+void check_particle_mass(const Scene& s, double density, const std::string& fabric) {
+  const auto& c = s.cloth;
+  const double mass = density * (c.size[0] / (c.particles[0] - 1)) * (c.size[1] / (c.particles[1] - 1));
+  // The weight, and the contact stiffness 10^4 weights over a distance, are
+  // derived from it: keep a margin of those factors below overflow.
+  if (!(mass >= DBL_MIN) || !std::isfinite(mass * 1e6))
+    fail("", "cloth.size: a particle's mass (fabric " + fabric + "'s " + format_double(density) +
+                 " kg/m^2 times its area) is not a usable number, got " + format_double(mass) +
+                 " kg for cloth.size = " + format_array(c.size) + " and cloth.particles = " +
+                 format_array(c.particles));
 }
 
 std::string scene_to_toml(const Scene& s) {

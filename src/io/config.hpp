@@ -23,6 +23,11 @@ Scene load_scene_text(const std::string& toml, const std::string& origin,
 // Refuses --set keys that a restart must not change (InputError).
 void check_restart_overrides(const std::vector<std::string>& overrides);
 
+// Refuses a cloth whose particle mass (the fabric's areal density times the
+// area per particle) is not a finite positive number; the scene and the
+// fabric are each valid alone, so only together can this be checked.
+void check_particle_mass(const Scene& s, double density, const std::string& fabric);
+
 // The resolved scene as TOML text (what --dry-run prints; also stored in outputs).
 std::string scene_to_toml(const Scene& s);
 

@@ -1,0 +1,108 @@
+#include "app/memory.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "decomp/collective.hpp"
+#include "io/error.hpp"
+
+namespace drape {
+
+namespace {
+
+constexpr int64_t kUnknown = std::numeric_limits<int64_t>::max();
+
+// "Key:   123 kB" from a /proc file, in bytes (kUnknown if absent).
+int64_t proc_kb(const char* file, const std::string& key) {
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(key + ":", 0) == 0) {
+      long long kb = 0;
+      if (std::sscanf(line.c_str() + key.size() + 1, "%lld", &kb) == 1) return int64_t(kb) * 1024;
+    }
+  return kUnknown;
+}
+
+// A single number from a cgroup v2 file ("max" or absent: kUnknown).
+int64_t cgroup_value(const std::string& file) {
+  std::ifstream in(file);
+  long long v = 0;
+  return in >> v ? int64_t(v) : kUnknown;
+}
+
+// This process's cgroup v2 directory ("0::/path" in /proc/self/cgroup).
+std::string cgroup_dir() {
+  std::ifstream in("/proc/self/cgroup");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("0::", 0) == 0) return "/sys/fs/cgroup" + line.substr(3);
+  return "";
+}
+
+// What is left under a limit, given the present use (both may be unknown).
+int64_t headroom(int64_t limit, int64_t used) {
+  if (limit == kUnknown) return kUnknown;
+  return used == kUnknown ? limit : std::max<int64_t>(0, limit - used);
+}
+
+int64_t soft_limit(int resource) {
+  rlimit r{};
+  if (getrlimit(resource, &r) != 0 || r.rlim_cur == RLIM_INFINITY) return kUnknown;
+  return int64_t(std::min<rlim_t>(r.rlim_cur, rlim_t(kUnknown)));
+}
+
+std::string gb(int64_t bytes) {
+  std::ostringstream s;
+  s.precision(bytes < 10e9 ? 2 : 3);
+  s << 1e-9 * double(bytes);
+  return s.str();
+}
+
+}  // namespace
+
+int64_t estimated_bytes_per_rank(int64_t n) {
+  // Every rank holds arrays over the whole grid (Cloth, the evaluator's
+  // buffers, the solver's vectors). Measured peak RSS (report.json's
+  // peak_rss_bytes) of the default scene, 10 steps, one rank and two:
+  // 200x200 124.5 MB, 400x400 410.5 MB, i.e. 2384 bytes a particle over
+  // 29 MB (newton + multigrid: 2373 over 35 MB; cg, AMRC and grid
+  // sequencing within 1 MB of these). Rounded up, for a margin.
+  constexpr int64_t kPerParticle = 2400, kFixed = int64_t(40) << 20;
+  return kFixed + kPerParticle * n;
+}
+
+int64_t available_bytes() {
+  const int64_t rss = proc_kb("/proc/self/status", "VmRSS");
+  int64_t room = proc_kb("/proc/meminfo", "MemAvailable");
+  // Address space and data segment count mappings, not only resident pages:
+  // what is left under them is the limit less the present size.
+  room = std::min(room, headroom(soft_limit(RLIMIT_AS), proc_kb("/proc/self/status", "VmSize")));
+  room = std::min(room, headroom(soft_limit(RLIMIT_DATA), proc_kb("/proc/self/status", "VmData")));
+  const std::string cg = cgroup_dir();
+  if (!cg.empty())
+    room = std::min(room, headroom(cgroup_value(cg + "/memory.max"), cgroup_value(cg + "/memory.current")));
+  if (room == kUnknown) return kUnknown;
+  return rss == kUnknown ? room : room + rss;
+}
+
+void check_memory(const Scene& scene, MPI_Comm comm) {
+  const auto& p = scene.cloth.particles;
+  const int64_t need = estimated_bytes_per_rank(int64_t(p[0]) * p[1]);
+  // The tightest rank decides for all (MiB fit an int up to 2 PiB).
+  const int64_t mine = std::min<int64_t>(available_bytes() >> 20, std::numeric_limits<int>::max());
+  const int64_t have = int64_t(-max_over_ranks(comm, -int(mine))) << 20;
+  if (need <= have) return;
+  throw InputError("cloth.particles = [" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + "] needs about " +
+                   gb(need) + " GB per rank, " + gb(have) +
+                   " GB are available: use fewer particles or give each rank more memory (every rank holds "
+                   "arrays over the whole grid, so more ranks do not lower it)");
+}
+
+}  // namespace drape
