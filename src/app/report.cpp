@@ -61,6 +61,17 @@ double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists,
   return red.max(worst);
 }
 
+double max_penetration_written(const Cloth& c, const Model& m, const Tiling& tiling, const std::vector<int>& owned,
+                               const Reducer& red) {
+  double worst = 0;
+  for (int t : owned) {
+    const TileRange r = tiling.range(t);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) worst = std::max(worst, penetration(m.contact.obstacle, c.x() + 3 * c.grid.id(i, j)));
+  }
+  return red.max(worst);
+}
+
 int64_t process_cpu_microseconds() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -161,7 +172,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("stopped_by_signal", s.signal ? signal_name(s.signal) : "");
   j.value("checkpoint", s.checkpoint);
   j.value("rest_speed", scene.solver.rest_speed);
-  j.value("max_penetration", penetration_depth);
+  j.value("max_penetration", penetration_depth);  // over the solved particles
+  j.value("max_penetration_written", s.penetration_written);  // over the written surface
   j.value("projections", (long long)n.projections);
   j.begin_object("zigzag")
       .value("share", s.zigzag.share())

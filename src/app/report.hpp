@@ -55,6 +55,7 @@ struct Summary {
   int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)
   bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
   Zigzag zigzag;                    // kinks at the mesh spacing in the final state
+  double penetration_written = 0;  // m: max_penetration_written of the final frame
   std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
@@ -79,6 +80,10 @@ Table2 table2(const LoopClock& a, const LoopClock& b, double time, int threads);
 int64_t active_particles(const Cloth& c);
 // Collective (the reducer's max).
 double max_penetration(const Cloth& c, const Model& m, const ActiveLists& lists, const Reducer& red);
+// The same over every particle of this rank's tiles as written (inactive ones
+// filled in on their leaves): what the output's surface does. Collective.
+double max_penetration_written(const Cloth& c, const Model& m, const Tiling& tiling, const std::vector<int>& owned,
+                               const Reducer& red);
 // This process's CPU time so far (user + system, all its threads), in µs:
 // beside the wall time, it times a run that shared its cores with others.
 int64_t process_cpu_microseconds();

@@ -427,6 +427,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.zigzag = count_zigzags(cloth, lists.particles.items, red);
     sum.multigrid = loop.newton().multigrid_stats();
     settle_for_output();
+    sum.penetration_written = max_penetration_written(cloth, model, tiling, owned, red);
     const Checksum ck = state_checksum(cloth, tiling, owned, red);
     {
       ScopedPhase ph(tm, kOutput);
