@@ -49,15 +49,6 @@ bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
   return mg_solves_ == 0 || lists_stamp(ev.lists()) != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
 }
 
-void NewtonSolver::precondition(const double* r, double* s) {
-  if (pc_ == Preconditioner::Multigrid) {
-    mg_.apply(r, s);
-    return;
-  }
-  const double* dc = dc_.data();
-  dots_.for_each_unknown(c_.layout.tension(), [&](int64_t c, int64_t) { s[c] = r[c] / dc[c]; });
-}
-
 // Preconditioned CG for K d = -rho. Its vectors are compact: the free
 // particles' positions numbered in tile order (Minimizer::tile_sums' c), so
 // that a coarse mesh's few unknowns lie together in memory instead of one
@@ -83,29 +74,44 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     }
   }
   double target, rs;
-  {
+  if (!mg) {
     ScopedPhase ph(tm, kVector);
-    double bb;
-    dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+    double sums[2];  // b.b, r.s with b = -rho: one pass, the diagonal's s on the way
+    dots_.tile_sums<2>(end, [&](int64_t c, int64_t k, double* acc) {
       const double b = -rho[k];
       dc[c] = diag[k];
       d[c] = 0;
       r[c] = b;
-      acc[0] += b * b;
-    }, &bb);
-    target = rel_tol * rel_tol * bb;
-  }
-  {
-    ScopedPhase ph(tm, kPrecondition);
-    precondition(r, s);
-  }
-  {
-    ScopedPhase ph(tm, kVector);
-    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) {
+      s[c] = r[c] / dc[c];
       p[c] = s[c];
       pg[k] = p[c];
-    });
-    dots_.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += r[c] * s[c]; }, &rs);
+      acc[0] += b * b;
+      acc[1] += r[c] * s[c];
+    }, sums);
+    target = rel_tol * rel_tol * sums[0];
+    rs = sums[1];
+  } else {
+    double bb;
+    {
+      ScopedPhase ph(tm, kVector);
+      dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+        const double b = -rho[k];
+        d[c] = 0;
+        r[c] = b;
+        acc[0] += b * b;
+      }, &bb);
+    }
+    {
+      ScopedPhase ph(tm, kPrecondition);
+      mg_.apply(r, s);
+    }
+    ScopedPhase ph(tm, kVector);
+    dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+      p[c] = s[c];
+      pg[k] = p[c];
+      acc[0] += r[c] * s[c];
+    }, &rs);
+    target = rel_tol * rel_tol * bb;
   }
   int it = 0;
   while (it < budget) {
@@ -143,7 +149,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     if (mg) {
       {
         ScopedPhase ph(tm, kPrecondition);
-        precondition(r, s);
+        mg_.apply(r, s);
       }
       ScopedPhase ph(tm, kVector);
       dots_.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += r[c] * s[c]; }, sums + 1);

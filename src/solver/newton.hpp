@@ -39,8 +39,6 @@ class NewtonSolver {
   const std::vector<double>& step() const { return d_; }
 
  private:
-  // s = M^-1 r on the compact vectors: the diagonal's or one V-cycle.
-  void precondition(const double* r, double* s);
   void setup_multigrid(Evaluator& ev);
   bool multigrid_stale(const Evaluator& ev) const;
 
