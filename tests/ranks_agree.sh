@@ -20,11 +20,11 @@ sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
 # The final state's kinks (report.json zigzag), counted by each rank over its own particles.
 zz() { python3 -c 'import json,sys; z=json.load(open(sys.argv[1]))["zigzag"]; print(z["pairs"], z["zigzags"])' "$1/report.json"; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
-# A cloth let down onto the floor just inside the contact layer: at rest on
-# its coarse mesh after a few steps, then split (the drape over the box would
-# take thousands of steps to rest).
+# A cloth let down onto the floor just inside the coarse mesh's contact layer
+# (half its 62.5 mm spacing): at rest on that mesh after a few steps, then
+# split (the drape over the box would take thousands of steps to rest).
 sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
-          --set 'obstacle.shape="none"' --set cloth.height=0.016)
+          --set 'obstacle.shape="none"' --set cloth.height=0.031)
 edges=(--set 'amrc.indicator="deflection"' --set amrc.refine=0.5 --set amrc.coarsen=0.1
        --set amrc.start_spacing=0.05 --set solver.steps=120 --set output.every=40)
 for method in $cases; do
@@ -75,7 +75,8 @@ for method in $cases; do
   if [[ $method == sequence ]]; then
     stages=$(python3 -c 'import json,sys; print(" ".join("%d@%d" % (g["level"], g["from_step"]) for g in json.load(open(sys.argv[1]))["stages"]))' \
              "$work/$method-1/report.json")
-    [[ $stages == "1@0 0@10" ]] || { echo "sequence: stages $stages, expected level 1 from step 0, level 0 from step 10"; exit 1; }
+    [[ $stages =~ ^1@0\ 0@([0-9]+)$ ]] && (( BASH_REMATCH[1] >= 2 )) ||
+      { echo "sequence: stages $stages, expected level 1 from step 0, then level 0 after a few steps at rest"; exit 1; }
     echo "sequence: stages $stages"
   fi
 done

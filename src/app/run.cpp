@@ -112,9 +112,13 @@ void add_step(RunCounters& n, const StepStats& st, int64_t active) {
 // settle too), and a coarse mesh's residual forces are measured in its own
 // particles' weight (4^level finest ones), so that a step converges to the
 // same relative accuracy on every mesh. Without it, the scene's physics.
-void stage_physics(Model& m, const Scene& scene, double finest_force_scale, bool sequencing, int level) {
+// Its contact layer is the mesh's own (solver/setup.cpp).
+void stage_physics(Model& m, const Scene& scene, const Fabric& fabric, const Grid& grid, double finest_force_scale,
+                   bool sequencing, int level) {
   m.drag = sequencing ? std::max(scene.solver.drag, scene.amrc.stage_drag) : scene.solver.drag;
   m.force_scale = finest_force_scale * std::ldexp(1.0, 2 * level);
+  set_contact_layer(m.contact, scene, fabric, std::ldexp(grid.hi, level), std::ldexp(grid.hj, level),
+                    std::fabs(m.gravity[2]));
 }
 
 }  // namespace
@@ -181,7 +185,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
     finest_force_scale = model.force_scale;
     sequencing = amrc && !scene.amrc.enabled;
-    stage_physics(model, scene, finest_force_scale, sequencing, sequence_level);
+    stage_physics(model, scene, fabric, cloth.grid, finest_force_scale, sequencing, sequence_level);
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
     // refuses more ranks than tiles
     dec = decompose(cloth, tiling, comm,
@@ -332,7 +336,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         loop.refresh_ghosts(true);
         amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level);
       }
-      stage_physics(model, scene, finest_force_scale, sequencing, sequence_level);
+      stage_physics(model, scene, fabric, cloth.grid, finest_force_scale, sequencing, sequence_level);
       mesh_changed();
       const double eased = red.max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
       ease_until = cloth.time + eased / kEaseRate;

@@ -34,6 +34,9 @@ struct Scene;
 
 // Builds the model of a scene and fabric for a grid of spacing h.
 Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj);
+// The contact layer (thickness and stiffness) of a mesh with spacings hi, hj
+// under gravity g (m/s^2).
+void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, double hi, double hj, double g);
 
 // A flat cloth at rest at the scene's height, on the finest mesh, every
 // particle active, nothing clamped. Allocates every array once.

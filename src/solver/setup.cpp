@@ -14,6 +14,22 @@ double Cloth::total_mass() const {
   return m;
 }
 
+// Contact acts within delta of a surface (half the mesh spacing, or half the
+// thickness if larger); a push of delta balances 10^4 weights of the mesh's
+// particles, so they settle well within delta and never reach the surface.
+// The layer follows the mesh solved: the chord between two particles on
+// either side of a right-angled edge clears it only if the layer is about
+// half their distance, so on a coarse mesh a finest-spacing layer lets the
+// surface written between them cut the edge.
+void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, double hi, double hj, double g) {
+  const double weight = fabric.density * hi * hj * g;
+  const double delta = scene.solver.contact_thickness > 0
+                           ? scene.solver.contact_thickness
+                           : std::max(0.5 * std::min(hi, hj), 0.5 * fabric.thickness);
+  c.thickness = delta;
+  c.stiffness = 1e4 * weight / delta;
+}
+
 Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj) {
   Model m;
   for (int d = 0; d < 2; ++d) {
@@ -43,14 +59,7 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   o.radius = os.radius;
   o.floor = os.floor;
   o.floor_z = 0.0;
-  // Contact acts within delta of a surface (half a grid spacing, or half the
-  // thickness if larger); a push of delta balances 10^4 particle weights, so
-  // particles settle well within delta and never reach the surface itself.
-  const double delta = scene.solver.contact_thickness > 0
-                           ? scene.solver.contact_thickness
-                           : std::max(0.5 * std::min(hi, hj), 0.5 * fabric.thickness);
-  m.contact.thickness = delta;
-  m.contact.stiffness = 1e4 * weight / delta;
+  set_contact_layer(m.contact, scene, fabric, hi, hj, g);
   m.dt = m.dt_prev = scene.solver.dt;
   m.memory = scene.solver.memory;
   m.drag = scene.solver.drag;
