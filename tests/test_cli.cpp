@@ -586,6 +586,39 @@ TEST(Cli, ReportSaysWhatWasSolvedOnTheFinestMesh) {
   EXPECT_NE(line.find(", " + unconverged + " unconverged step(s)"), std::string::npos) << line;
 }
 
+// The safety net's projections are in the closing line when there are any:
+// one Newton iteration per 20 ms step against a micrometre contact layer
+// lets the cloth fall into the box top, and each particle found inside is set
+// back on the surface. The same run with a working layer needs none, and
+// its line says nothing of them.
+TEST(Cli, ClosingLineCountsTheSafetyNetsProjections) {
+  const auto small = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "small-box.toml";
+  const std::vector<std::string> base = {"--config", small.string(), "--set", "cloth.particles=[17,17]", "--set",
+                                         "amrc.start_spacing=0", "--set", "cloth.height=0.40001", "--set",
+                                         "solver.steps=10", "--set", "output.picture=false", "--set", "output.every=0"};
+  for (int thin = 0; thin < 2; ++thin) {
+    std::vector<std::string> args = base;
+    const fs::path outdir = tmp_dir() / ("net-" + std::to_string(thin));
+    if (thin)
+      args.insert(args.end(), {"--set", "solver.contact_thickness=1e-6", "--set", "solver.max_iterations=1", "--set",
+                               "solver.dt=0.02", "--set", "solver.dt_min=0.02", "--set", "solver.dt_max=0.02"});
+    args.insert(args.end(), {"--output", outdir.string()});
+    const Result r = run_drape(args, "net-" + std::to_string(thin));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string projections = report_field(slurp(outdir / "report.json"), "projections");
+    const std::string line = closing_line(r.out);
+    if (!thin) {
+      EXPECT_EQ(projections, "0");
+      EXPECT_EQ(line.find("safety net"), std::string::npos) << line;
+      continue;
+    }
+    ASSERT_NE(projections, "0") << "the case meant to reach the safety net did not";
+    EXPECT_NE(line.find(", " + projections + " particle(s) set back on a surface by the safety net"),
+              std::string::npos)
+        << line;
+  }
+}
+
 // Newton with the multigrid preconditioner: report.json counts Newton's
 // steps and the linear iterations (the `iterations` of a Newton run) and
 // lists the levels (finest first, each coarser, the finest cycled), and the

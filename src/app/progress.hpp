@@ -53,6 +53,8 @@ class Progress {
     double spacing = 0;         // m, the final mesh's
     int ni = 0, nj = 0;         // the finest grid
     long long unconverged = 0;  // steps that ended at the iteration limit
+    double written = 0;         // m, the deepest penetration of the surface as written
+    long long projections = 0;  // particles the safety net set back on a surface
   };
 
   // The closing line: the time, the state, and what was solved; it names
@@ -71,6 +73,10 @@ class Progress {
     std::printf("done in %s: cloth %s%s, %s with %s, deepest penetration %.3g m",
                 clock_text(seconds(start_, clock::now())).c_str(), at_rest ? "at rest" : "still moving",
                 mesh.c_str(), s.method, pre.c_str(), penetration);
+    // Where they differ, the surface filled in between coarse particles cut
+    // an obstacle; projections mean the contact layer let particles through.
+    if (s.written != penetration) std::printf(" (%.3g m on the surface as written)", s.written);
+    if (s.projections > 0) std::printf(", %lld particle(s) set back on a surface by the safety net", s.projections);
     if (s.unconverged > 0) std::printf(", %lld unconverged step(s)", s.unconverged);
     std::printf("\n");
     // A few kinks are folds caught between particles; many mean the mesh

@@ -459,6 +459,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         solved.ni = cloth.grid.ni;
         solved.nj = cloth.grid.nj;
         solved.unconverged = sum.counters.unconverged;
+        solved.written = sum.penetration_written;
+        solved.projections = sum.counters.projections;
         progress.finish(sum.at_rest, depth, sum.zigzag.share(), solved);
         print_timing_table(tm, wall, cpu, ck.hex(), sum.decomp, ranks, sum.peak_rss);
         print_table2(sum.table2, threads);
