@@ -339,6 +339,34 @@ TEST(Config, ShortNumbersWhenExact) {
   EXPECT_NE(text.find("shape = \"box\""), std::string::npos) << text;
 }
 
+// The reference (docs/configuration.md's tables) has a row for each key
+// --dry-run prints, with the same default, and lists an enumeration's names.
+TEST(Config, ReferenceRowPerKeyWithItsDefault) {
+  const std::string ref = drape::scene_reference();
+  std::istringstream in(drape::scene_to_toml(Scene{}));
+  std::string line, section;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line[0] == '[') {
+      section = line.substr(1, line.find(']') - 1) + ".";
+      continue;
+    }
+    const size_t eq = line.find(" = ");
+    std::string value = line.substr(eq + 3, line.find("  #") - eq - 3);
+    value.erase(value.find_last_not_of(' ') + 1);
+    const std::string row = "| `" + section + line.substr(0, eq) + "` | `" + value + "` |";
+    EXPECT_NE(ref.find("\n" + row), std::string::npos) << row;
+    ++rows;
+  }
+  // 7 tables, each a heading, a blank line, the header and its rule; a blank line between.
+  EXPECT_EQ(std::count(ref.begin(), ref.end(), '\n'), rows + 4 * 7 + 6) << "a row for a key --dry-run lacks";
+  std::string shapes;
+  for (auto e : {drape::ObstacleShape::Box, drape::ObstacleShape::Sphere, drape::ObstacleShape::None})
+    shapes += std::string(shapes.empty() ? "`" : ", `") + to_string(e) + "`";
+  EXPECT_NE(ref.find("| `obstacle.shape` | `\"box\"` |  | " + shapes + " |"), std::string::npos) << ref;
+}
+
 TEST(Config, FileThenOverrides) {
   const std::string path = write_scene(
       "name = \"t\"\n[cloth]\nparticles = [33, 17]\ntile = 8\n[solver]\ndt = 1\ndt_max = 2\n");
