@@ -544,3 +544,65 @@ TEST(ConfigBad, OverrideOfFileKeyNamesOverride) {
   const std::string msg = error_of(path, {"solver.steps=0"});
   EXPECT_EQ(msg.rfind("--set solver.steps=0: solver.steps", 0), 0u) << msg;
 }
+
+// Each key's range ends where its documentation says: the last value
+// allowed loads, the next one past it (a step or an ulp) is refused naming
+// the key. Together with the messages above this pins every declared bound.
+struct Edge {
+  const char* key;
+  const char* allowed;
+  const char* refused;
+};
+
+const Edge kEdges[] = {
+    {"name", "\"x\"", "\"\""},
+    {"cloth.particles", "[3, 3]", "[3, 2]"},
+    {"cloth.size", "[1e-3, 1.0]", "[1.0, 0.0]"},
+    {"cloth.fabric", "\"x\"", "\"\""},
+    {"cloth.tile", "2", "1"},
+    {"cloth.bend_reversal", "1.0000000000000002", "1.0"},
+    {"cloth.bend_reversal", "0.0", "0.5"},
+    {"cloth.shear_reversal", "1.0000000000000002", "1.0"},
+    {"cloth.shear_reversal", "0.0", "-1e-300"},
+    {"cloth.stretch_reversal", "1.0", "0.9999999999999999"},
+    {"cloth.stretch_reversal", "0.0", "1e-300"},
+    {"cloth.compression", "1.0", "1.0000000000000002"},
+    {"cloth.compression", "0.0", "-1e-300"},
+    {"obstacle.size", "[0.4, 1e-300, 0.4]", "[0.4, 0.0, 0.4]"},
+    {"obstacle.radius", "1e-300", "0.0"},
+    {"solver.dt_min", "1e-300", "0.0"},
+    {"solver.steps", "1", "0"},
+    {"solver.max_iterations", "1", "0"},
+    {"solver.tolerance", "1e-300", "0.0"},
+    {"solver.damping", "0.9999999999999999", "1.0"},
+    {"solver.damping", "0.0", "-1e-300"},
+    {"solver.rest_speed", "0.0", "-1e-300"},
+    {"solver.contact_thickness", "0.0", "-1e-300"},
+    {"solver.memory", "0.0", "-1e-300"},
+    {"solver.drag", "0.0", "-1e-300"},
+    {"solver.wall_limit", "0.0", "-1e-300"},
+    {"solver.end_time", "0.0", "-1e-300"},
+    {"output.every", "0", "-1"},
+    {"output.checkpoint_every", "0", "-1"},
+    {"parallel.chunk", "1", "0"},
+    {"parallel.threads", "1024", "1025"},
+    {"parallel.threads", "0", "-1"},
+    {"parallel.imbalance", "1.0", "0.9999999999999999"},
+    {"amrc.max_level", "10", "11"},
+    {"amrc.max_level", "0", "-1"},
+    {"amrc.refine", "0.03", "0.0"},
+    {"amrc.every", "1", "0"},
+    {"amrc.coarsen_speed", "0.0", "-1e-300"},
+    {"amrc.start_spacing", "0.0", "-1e-300"},
+    {"amrc.stage_drag", "0.0", "-1e-300"},
+};
+
+TEST(ConfigBad, RangesEndWhereDocumented) {
+  for (const Edge& e : kEdges) {
+    SCOPED_TRACE(std::string(e.key) + " allows " + e.allowed + ", refuses " + e.refused);
+    EXPECT_NO_THROW(drape::load_scene(std::nullopt, {std::string(e.key) + "=" + e.allowed}));
+    const std::string set = std::string(e.key) + "=" + e.refused;
+    const std::string msg = error_of(std::nullopt, {set});
+    EXPECT_EQ(msg.rfind("--set " + set + ": " + e.key + ": ", 0), 0u) << msg;
+  }
+}
