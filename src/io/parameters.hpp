@@ -12,6 +12,7 @@
 #include <variant>
 #include <vector>
 
+#include "io/bound.hpp"
 #include "solver/scene.hpp"
 
 namespace drape {
@@ -25,32 +26,6 @@ enum class ParameterKind { Int, Float, Bool, String, Int2, Float2, Float3 };
 
 // "an integer", "an array of 2 numbers": what a wrong type was expected to be.
 const char* expected_text(ParameterKind k);
-
-// The values a key allows, checked on each number it holds (an array's
-// elements, a string's length). `text` is what messages and the reference
-// say after "must be"; `note` is added in parentheses.
-struct Bound {
-  std::string text;                    // "> 0", "in [0, 1)"; empty: anything
-  std::function<bool(double)> ok;      // null: anything
-  std::string note;                    // "0: no limit"
-  std::string subject;                 // arrays: "sizes" -> "sizes must be > 0"
-  bool each = false;                   // "NI and NJ must each be >= 3"
-  std::string message;                 // replaces the generated one ("must not be empty")
-
-  Bound with_note(std::string n) const;
-};
-
-Bound any();
-Bound positive();                      // > 0
-Bound non_negative();                  // >= 0
-Bound at_least(double lo);             // >= lo
-Bound above(double lo);                // > lo
-Bound in_closed(double lo, double hi); // [lo, hi]
-Bound in_half_open(double lo, double hi);  // [lo, hi)
-Bound zero_or(const Bound& b, const std::string& zero_means);  // 0 (zero_means) or b
-Bound non_empty();                     // a string
-Bound all_of(const std::string& subject, Bound b);   // an array: "sizes must be ..."
-Bound each_of(const std::string& subject, Bound b);  // an array: "NI and NJ must each be ..."
 
 struct Parameter {
   std::string section;  // "" for a top-level key
