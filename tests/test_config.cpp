@@ -519,6 +519,14 @@ const BadSet kBadSets[] = {
     {"bad_method", "solver.method=fast", {"solver.method: must be one of newton, cg"}},
     {"clamp_too_many_rows", "cloth.clamp=1000", {"cloth.clamp: must be in [0, NI), got 1000"}},
     {"clamp_negative", "cloth.clamp=-1", {"cloth.clamp: must be in [0, NI), got -1"}},
+    // Each form of a declared bound's words.
+    {"particles_two", "cloth.particles=[2,9]", {"cloth.particles: NI and NJ must each be >= 3, got [2, 9]"}},
+    {"size_zero", "cloth.size=[1.0,0]", {"cloth.size: sizes must be > 0, got [1.0, 0.0]"}},
+    {"reversal_one", "cloth.bend_reversal=1",
+     {"cloth.bend_reversal: must be 0 (the band taken literally) or > 1, got 1.0"}},
+    {"threads_many", "parallel.threads=1025",
+     {"parallel.threads: must be in [0, 1024] (0: OpenMP default), got 1025"}},
+    {"fabric_empty", "cloth.fabric=\"\"", {"cloth.fabric: must not be empty"}},
 };
 
 TEST(ConfigBad, OverridesRefusedNamingTheOverride) {
