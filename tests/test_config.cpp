@@ -339,6 +339,34 @@ TEST(Config, ShortNumbersWhenExact) {
   EXPECT_NE(text.find("shape = \"box\""), std::string::npos) << text;
 }
 
+// The reference (docs/configuration.md's tables) has a row for each key
+// --dry-run prints, with the same default, and lists an enumeration's names.
+TEST(Config, ReferenceRowPerKeyWithItsDefault) {
+  const std::string ref = drape::scene_reference();
+  std::istringstream in(drape::scene_to_toml(Scene{}));
+  std::string line, section;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line[0] == '[') {
+      section = line.substr(1, line.find(']') - 1) + ".";
+      continue;
+    }
+    const size_t eq = line.find(" = ");
+    std::string value = line.substr(eq + 3, line.find("  #") - eq - 3);
+    value.erase(value.find_last_not_of(' ') + 1);
+    const std::string row = "| `" + section + line.substr(0, eq) + "` | `" + value + "` |";
+    EXPECT_NE(ref.find("\n" + row), std::string::npos) << row;
+    ++rows;
+  }
+  // 7 tables, each a heading, a blank line, the header and its rule; a blank line between.
+  EXPECT_EQ(std::count(ref.begin(), ref.end(), '\n'), rows + 4 * 7 + 6) << "a row for a key --dry-run lacks";
+  std::string shapes;
+  for (auto e : {drape::ObstacleShape::Box, drape::ObstacleShape::Sphere, drape::ObstacleShape::None})
+    shapes += std::string(shapes.empty() ? "`" : ", `") + to_string(e) + "`";
+  EXPECT_NE(ref.find("| `obstacle.shape` | `\"box\"` |  | " + shapes + " |"), std::string::npos) << ref;
+}
+
 TEST(Config, FileThenOverrides) {
   const std::string path = write_scene(
       "name = \"t\"\n[cloth]\nparticles = [33, 17]\ntile = 8\n[solver]\ndt = 1\ndt_max = 2\n");
@@ -491,6 +519,14 @@ const BadSet kBadSets[] = {
     {"bad_method", "solver.method=fast", {"solver.method: must be one of newton, cg"}},
     {"clamp_too_many_rows", "cloth.clamp=1000", {"cloth.clamp: must be in [0, NI), got 1000"}},
     {"clamp_negative", "cloth.clamp=-1", {"cloth.clamp: must be in [0, NI), got -1"}},
+    // Each form of a declared bound's words.
+    {"particles_two", "cloth.particles=[2,9]", {"cloth.particles: NI and NJ must each be >= 3, got [2, 9]"}},
+    {"size_zero", "cloth.size=[1.0,0]", {"cloth.size: sizes must be > 0, got [1.0, 0.0]"}},
+    {"reversal_one", "cloth.bend_reversal=1",
+     {"cloth.bend_reversal: must be 0 (the band taken literally) or > 1, got 1.0"}},
+    {"threads_many", "parallel.threads=1025",
+     {"parallel.threads: must be in [0, 1024] (0: OpenMP default), got 1025"}},
+    {"fabric_empty", "cloth.fabric=\"\"", {"cloth.fabric: must not be empty"}},
 };
 
 TEST(ConfigBad, OverridesRefusedNamingTheOverride) {
@@ -515,4 +551,66 @@ TEST(ConfigBad, OverrideOfFileKeyNamesOverride) {
   const std::string path = write_scene("[solver]\nsteps = 3\n");
   const std::string msg = error_of(path, {"solver.steps=0"});
   EXPECT_EQ(msg.rfind("--set solver.steps=0: solver.steps", 0), 0u) << msg;
+}
+
+// Each key's range ends where its documentation says: the last value
+// allowed loads, the next one past it (a step or an ulp) is refused naming
+// the key. Together with the messages above this pins every declared bound.
+struct Edge {
+  const char* key;
+  const char* allowed;
+  const char* refused;
+};
+
+const Edge kEdges[] = {
+    {"name", "\"x\"", "\"\""},
+    {"cloth.particles", "[3, 3]", "[3, 2]"},
+    {"cloth.size", "[1e-3, 1.0]", "[1.0, 0.0]"},
+    {"cloth.fabric", "\"x\"", "\"\""},
+    {"cloth.tile", "2", "1"},
+    {"cloth.bend_reversal", "1.0000000000000002", "1.0"},
+    {"cloth.bend_reversal", "0.0", "0.5"},
+    {"cloth.shear_reversal", "1.0000000000000002", "1.0"},
+    {"cloth.shear_reversal", "0.0", "-1e-300"},
+    {"cloth.stretch_reversal", "1.0", "0.9999999999999999"},
+    {"cloth.stretch_reversal", "0.0", "1e-300"},
+    {"cloth.compression", "1.0", "1.0000000000000002"},
+    {"cloth.compression", "0.0", "-1e-300"},
+    {"obstacle.size", "[0.4, 1e-300, 0.4]", "[0.4, 0.0, 0.4]"},
+    {"obstacle.radius", "1e-300", "0.0"},
+    {"solver.dt_min", "1e-300", "0.0"},
+    {"solver.steps", "1", "0"},
+    {"solver.max_iterations", "1", "0"},
+    {"solver.tolerance", "1e-300", "0.0"},
+    {"solver.damping", "0.9999999999999999", "1.0"},
+    {"solver.damping", "0.0", "-1e-300"},
+    {"solver.rest_speed", "0.0", "-1e-300"},
+    {"solver.contact_thickness", "0.0", "-1e-300"},
+    {"solver.memory", "0.0", "-1e-300"},
+    {"solver.drag", "0.0", "-1e-300"},
+    {"solver.wall_limit", "0.0", "-1e-300"},
+    {"solver.end_time", "0.0", "-1e-300"},
+    {"output.every", "0", "-1"},
+    {"output.checkpoint_every", "0", "-1"},
+    {"parallel.chunk", "1", "0"},
+    {"parallel.threads", "1024", "1025"},
+    {"parallel.threads", "0", "-1"},
+    {"parallel.imbalance", "1.0", "0.9999999999999999"},
+    {"amrc.max_level", "10", "11"},
+    {"amrc.max_level", "0", "-1"},
+    {"amrc.refine", "0.03", "0.0"},
+    {"amrc.every", "1", "0"},
+    {"amrc.coarsen_speed", "0.0", "-1e-300"},
+    {"amrc.start_spacing", "0.0", "-1e-300"},
+    {"amrc.stage_drag", "0.0", "-1e-300"},
+};
+
+TEST(ConfigBad, RangesEndWhereDocumented) {
+  for (const Edge& e : kEdges) {
+    SCOPED_TRACE(std::string(e.key) + " allows " + e.allowed + ", refuses " + e.refused);
+    EXPECT_NO_THROW(drape::load_scene(std::nullopt, {std::string(e.key) + "=" + e.allowed}));
+    const std::string set = std::string(e.key) + "=" + e.refused;
+    const std::string msg = error_of(std::nullopt, {set});
+    EXPECT_EQ(msg.rfind("--set " + set + ": " + e.key + ": ", 0), 0u) << msg;
+  }
 }

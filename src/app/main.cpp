@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
                "Without --config it runs the embedded default: the paper's box drape."};
   std::string config_path, output_dir = "out", restart;
   std::vector<std::string> overrides;
-  bool dry_run = false, quiet = false;
+  bool dry_run = false, quiet = false, help_config = false;
   int threads = 0;
   app.add_option("-c,--config", config_path, "scene file (TOML)");
   app.add_option("-s,--set", overrides, "override a scene key: section.key=value (repeatable)")
@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1024));
   app.add_flag("--dry-run", dry_run, "validate, print the resolved scene and exit");
   app.add_flag("-q,--quiet", quiet, "no progress lines");
+  app.add_flag("--help-config", help_config, "print the reference of every scene key (markdown) and exit");
   app.set_version_flag("-V,--version", std::string("drape ") + DRAPE_VERSION);
 
   try {
@@ -72,6 +73,11 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const CLI::ParseError& e) {
     return fail(2, e.what() + std::string(" (see drape --help)"));
+  }
+  if (help_config) {
+    if (root) std::cout << drape::scene_reference();
+    MPI_Finalize();
+    return 0;
   }
 
   try {

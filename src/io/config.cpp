@@ -2,7 +2,8 @@
 //
 // The flow: parse the file into a toml::table, merge the overrides into it
 // (remembering which keys they set), refuse unknown sections and keys, read
-// each known key with a type check, then check ranges on the resolved Scene.
+// each key the schema declares (scene_schema.cpp) with a type check, check
+// each key's own range, then the checks that involve several keys.
 // Every message is one line naming the key and where its value came from:
 // "file:line" for a file, "--set key=value" for an override.
 #include "io/config.hpp"
@@ -10,172 +11,36 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
-#include <charconv>
 #include <climits>
 #include <cmath>
 #include <cfloat>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "io/error.hpp"
+#include "io/scene_schema.hpp"
 #include "io/text.hpp"
+#include "io/toml_text.hpp"
 #include "solver/cloth.hpp"
 
 namespace drape {
 namespace {
 
-// ---------------------------------------------------------------- schema --
+using Kind = ParameterKind;
 
-enum class Kind { Int, Float, Bool, String, Int2, Float2, Float3 };
+const ParameterList& schema() { return scene_parameters(); }
 
-struct KeySpec {
-  const char* section;  // "" for a top-level key
-  const char* key;
-  Kind kind;
-};
-
-// Exactly the fields of scene.hpp. A new key goes here and in read_scene(),
-// validate() and scene_to_toml().
-const KeySpec kKeys[] = {
-    {"", "name", Kind::String},
-    {"cloth", "particles", Kind::Int2},
-    {"cloth", "size", Kind::Float2},
-    {"cloth", "fabric", Kind::String},
-    {"cloth", "tile", Kind::Int},
-    {"cloth", "shear", Kind::Bool},
-    {"cloth", "clamp", Kind::Int},
-    {"cloth", "bend_reversal", Kind::Float},
-    {"cloth", "shear_reversal", Kind::Float},
-    {"cloth", "stretch_reversal", Kind::Float},
-    {"cloth", "compression", Kind::Float},
-    {"cloth", "height", Kind::Float},
-    {"cloth", "center", Kind::Float2},
-    {"obstacle", "shape", Kind::String},
-    {"obstacle", "center", Kind::Float3},
-    {"obstacle", "size", Kind::Float3},
-    {"obstacle", "radius", Kind::Float},
-    {"obstacle", "floor", Kind::Bool},
-    {"solver", "dt", Kind::Float},
-    {"solver", "dt_min", Kind::Float},
-    {"solver", "dt_max", Kind::Float},
-    {"solver", "steps", Kind::Int},
-    {"solver", "max_iterations", Kind::Int},
-    {"solver", "tolerance", Kind::Float},
-    {"solver", "gradient", Kind::String},
-    {"solver", "method", Kind::String},
-    {"solver", "preconditioner", Kind::String},
-    {"solver", "damping", Kind::Float},
-    {"solver", "rest_speed", Kind::Float},
-    {"solver", "contact_thickness", Kind::Float},
-    {"solver", "memory", Kind::Float},
-    {"solver", "drag", Kind::Float},
-    {"solver", "wall_limit", Kind::Float},
-    {"solver", "end_time", Kind::Float},
-    {"output", "every", Kind::Int},
-    {"output", "picture", Kind::Bool},
-    {"output", "checkpoint_every", Kind::Int},
-    {"parallel", "schedule", Kind::String},
-    {"parallel", "chunk", Kind::Int},
-    {"parallel", "threads", Kind::Int},
-    {"parallel", "imbalance", Kind::Float},
-    {"amrc", "enabled", Kind::Bool},
-    {"amrc", "max_level", Kind::Int},
-    {"amrc", "refine", Kind::Float},
-    {"amrc", "coarsen", Kind::Float},
-    {"amrc", "every", Kind::Int},
-    {"amrc", "coarsen_speed", Kind::Float},
-    {"amrc", "indicator", Kind::String},
-    {"amrc", "start_spacing", Kind::Float},
-    {"amrc", "stage_drag", Kind::Float},
-};
-
-const char* const kSections[] = {"cloth", "obstacle", "solver", "output", "parallel", "amrc"};
-
-std::string full_name(const KeySpec& k) {
-  return *k.section ? std::string(k.section) + "." + k.key : std::string(k.key);
-}
-
-const KeySpec* find_key(const std::string& full) {
-  for (const KeySpec& k : kKeys)
-    if (full_name(k) == full) return &k;
-  return nullptr;
-}
+const Parameter* find_key(const std::string& full) { return schema().find(full); }
 
 bool is_section(const std::string& name) {
-  for (const char* s : kSections)
-    if (name == s) return true;
-  return false;
-}
-
-const char* expected(Kind k) {
-  switch (k) {
-    case Kind::Int: return "an integer";
-    case Kind::Float: return "a number";
-    case Kind::Bool: return "a boolean (true or false)";
-    case Kind::String: return "a string";
-    case Kind::Int2: return "an array of 2 integers";
-    case Kind::Float2: return "an array of 2 numbers";
-    case Kind::Float3: return "an array of 3 numbers";
-  }
-  return "?";
-}
-
-// ------------------------------------------------------------ formatting --
-
-// Shortest text that reads back to exactly `v`, always a TOML float. Like
-// Python's repr: plain digits for 1e-4 <= |v| < 1e16, else an exponent.
-std::string format_double(double v) {
-  char buf[400];  // room for the longest fixed-notation double
-  const double a = std::fabs(v);
-  const auto form = a == 0 || (a >= 1e-4 && a < 1e16) ? std::chars_format::fixed
-                                                       : std::chars_format::scientific;
-  const auto r = std::to_chars(buf, buf + sizeof buf, v, form);
-  std::string s(buf, r.ptr);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // "1" -> "1.0"
-  return s;
-}
-
-template <class T, size_t N>
-std::string format_array(const std::array<T, N>& a) {
-  std::string s = "[";
-  for (size_t i = 0; i < N; ++i) {
-    if (i) s += ", ";
-    if constexpr (std::is_floating_point_v<T>)
-      s += format_double(a[i]);
-    else
-      s += std::to_string(a[i]);
-  }
-  return s + "]";
-}
-
-// A TOML basic string: quotes, backslashes and control characters escaped.
-std::string quote(const std::string& text) {
-  std::string s = "\"";
-  for (unsigned char c : text) {
-    switch (c) {
-      case '"': s += "\\\""; break;
-      case '\\': s += "\\\\"; break;
-      case '\n': s += "\\n"; break;
-      case '\t': s += "\\t"; break;
-      case '\r': s += "\\r"; break;
-      default:
-        if (c < 0x20 || c == 0x7f) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04X", c);
-          s += buf;
-        } else {
-          s += static_cast<char>(c);
-        }
-    }
-  }
-  return s + "\"";
+  const auto& s = schema().sections();
+  return std::find(s.begin(), s.end(), name) != s.end();
 }
 
 // ---------------------------------------------------------------- errors --
@@ -207,10 +72,10 @@ std::string suggest_key(const std::string& full) {
   const std::string section = dot == std::string::npos ? "" : full.substr(0, dot);
   size_t best = SIZE_MAX;
   std::string name;
-  for (const KeySpec& k : kKeys) {
-    const size_t d = std::min(edit_distance(full, full_name(k)),
+  for (const Parameter& k : schema().all()) {
+    const size_t d = std::min(edit_distance(full, k.full_name()),
                               edit_distance(bare, k.key) + (section == k.section ? 0 : 2));
-    if (d < best) best = d, name = full_name(k);
+    if (d < best) best = d, name = k.full_name();
   }
   const size_t limit = std::max<size_t>(2, bare.size() / 3);
   return best <= limit ? " (did you mean " + name + "?)" : "";
@@ -219,7 +84,7 @@ std::string suggest_key(const std::string& full) {
 std::string suggest_section(const std::string& name) {
   size_t best = SIZE_MAX;
   std::string found;
-  for (const char* s : kSections) {
+  for (const std::string& s : schema().sections()) {
     const size_t d = edit_distance(name, s);
     if (d < best) best = d, found = s;
   }
@@ -233,8 +98,8 @@ struct Config {
   toml::table root;
   std::map<std::string, std::string> overrides;  // key -> "--set key=value"
 
-  const toml::node* node(const KeySpec& k) const {
-    const toml::node* n = *k.section ? root.get(k.section) : &root;
+  const toml::node* node(const Parameter& k) const {
+    const toml::node* n = !k.section.empty() ? root.get(k.section) : &root;
     const toml::table* t = n ? n->as_table() : nullptr;
     return t ? t->get(k.key) : nullptr;
   }
@@ -242,7 +107,7 @@ struct Config {
   std::string where(const std::string& key) const {
     const auto o = overrides.find(key);
     if (o != overrides.end()) return o->second;
-    const KeySpec* k = find_key(key);
+    const Parameter* k = find_key(key);
     const toml::node* n = k ? node(*k) : nullptr;
     return n ? location(n->source()) : "";
   }
@@ -279,12 +144,12 @@ void apply_override(Config& cfg, const std::string& text) {
   if (eq == std::string::npos) fail(where, "expected section.key=value (no '=')");
   const std::string key = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
   if (key.empty()) fail(where, "missing key before '='");
-  const KeySpec* spec = find_key(key);
+  const Parameter* spec = find_key(key);
   if (!spec) fail(where, "unknown key " + key + suggest_key(key));
   if (value.empty()) fail(where, key + ": missing value after '='");
 
   toml::table* section = &cfg.root;
-  if (*spec->section) {
+  if (!spec->section.empty()) {
     if (!cfg.root.contains(spec->section)) cfg.root.insert(spec->section, toml::table{});
     section = cfg.root.get(spec->section)->as_table();
     if (!section) return;  // the file's malformed [section] is reported later
@@ -298,10 +163,10 @@ void apply_override(Config& cfg, const std::string& text) {
       parsed = toml::parse("v = " + value, std::string_view("--set"));
     } catch (const toml::parse_error&) {
       // toml++'s own words ("expected 'false', saw 'fas'") would mislead here.
-      fail(where, key + ": expected " + expected(spec->kind) + ", got '" + value + "' (not a TOML value)");
+      fail(where, key + ": expected " + expected_text(spec->kind) + ", got '" + value + "' (not a TOML value)");
     }
     if (parsed.size() != 1 || !parsed.contains("v"))
-      fail(where, key + ": expected " + expected(spec->kind) + ", got '" + value + "' (more than one value)");
+      fail(where, key + ": expected " + expected_text(spec->kind) + ", got '" + value + "' (more than one value)");
     section->insert_or_assign(spec->key, *parsed.get("v"));
   }
   cfg.overrides[key] = where;
@@ -320,7 +185,7 @@ void refuse_unknown(const Config& cfg) {
   };
   for (auto&& [k, node] : cfg.root) {
     const std::string name(k.str());
-    if (name == "name") continue;
+    if (find_key(name)) continue;  // a top-level key
     if (!is_section(name)) {
       if (node.is_table())
         add(k.source(), "unknown section [" + name + "]" + suggest_section(name));
@@ -346,63 +211,58 @@ void refuse_unknown(const Config& cfg) {
 
 // --------------------------------------------------------- typed reading --
 
+// Each declared key's value from the merged table, type-checked.
 class Reader {
  public:
   explicit Reader(const Config& cfg) : cfg_(cfg) {}
 
-  void get(const char* key, int& out) { if (auto* n = find(key, Kind::Int)) out = to_int(key, *n, Kind::Int); }
-  void get(const char* key, double& out) { if (auto* n = find(key, Kind::Float)) out = to_double(key, *n, Kind::Float); }
-  void get(const char* key, bool& out) {
-    if (auto* n = find(key, Kind::Bool)) {
-      if (!n->is_boolean()) wrong_type(key, Kind::Bool, type_name(*n));
-      out = n->as_boolean()->get();
+  // The key's value, or nothing when the scene does not give it.
+  std::optional<ParameterValue> read(const Parameter& p) const {
+    const toml::node* n = cfg_.node(p);
+    if (!n) return std::nullopt;
+    const std::string key = p.full_name();
+    switch (p.kind) {
+      case Kind::Int: return to_int(key, *n, p.kind);
+      case Kind::Float: return to_double(key, *n, p.kind);
+      case Kind::Bool: return boolean(key, *n);
+      case Kind::String: return string(p, *n);
+      case Kind::Int2: return array<int, 2>(key, *n, p.kind);
+      case Kind::Float2: return array<double, 2>(key, *n, p.kind);
+      case Kind::Float3: return array<double, 3>(key, *n, p.kind);
     }
-  }
-  bool get(const char* key, std::string& out) {
-    const toml::node* n = find(key, Kind::String);
-    if (!n) return false;
-    if (!n->is_string()) wrong_type(key, Kind::String, type_name(*n));
-    out = n->as_string()->get();
-    return true;
-  }
-  void get(const char* key, std::array<int, 2>& out) {
-    if (auto* n = find(key, Kind::Int2))
-      for (size_t i = 0; i < 2; ++i) out[i] = to_int(key, element(key, *n, Kind::Int2, 2, i), Kind::Int2);
-  }
-  template <size_t N>
-  void get(const char* key, std::array<double, N>& out) {
-    const Kind kind = N == 2 ? Kind::Float2 : Kind::Float3;
-    if (auto* n = find(key, kind))
-      for (size_t i = 0; i < N; ++i) out[i] = to_double(key, element(key, *n, kind, N, i), kind);
-  }
-
-  // A string key naming one of an enumeration's values (as to_string spells them).
-  template <class E>
-  void get_enum(const char* key, E& out, std::initializer_list<E> all) {
-    std::string text;
-    if (!get(key, text)) return;
-    std::string names;
-    for (E e : all) {
-      if (text == to_string(e)) {
-        out = e;
-        return;
-      }
-      names += std::string(names.empty() ? "" : ", ") + to_string(e);
-    }
-    fail(cfg_.where(key), std::string(key) + ": must be one of " + names + "; got " + quote(text));
+    throw std::logic_error("config schema: " + key);
   }
 
  private:
-  // The key's node, or null when not given. The schema and the reader must
-  // agree on the kind: a mismatch is a bug here, not bad input.
-  const toml::node* find(const char* key, Kind kind) const {
-    const KeySpec* k = find_key(key);
-    if (!k || k->kind != kind) throw std::logic_error(std::string("config schema: ") + key);
-    return cfg_.node(*k);
+  [[noreturn]] void wrong_type(const std::string& key, Kind kind, const std::string& got) const {
+    fail(cfg_.where(key), key + ": expected " + expected_text(kind) + ", got " + got);
   }
 
-  [[noreturn]] void wrong_type(const std::string& key, Kind kind, const std::string& got) const {
-    fail(cfg_.where(key), key + ": expected " + expected(kind) + ", got " + got);
+  bool boolean(const std::string& key, const toml::node& n) const {
+    if (!n.is_boolean()) wrong_type(key, Kind::Bool, type_name(n));
+    return n.as_boolean()->get();
+  }
+
+  // An enumeration's name must be one of its choices (as to_string spells them).
+  std::string string(const Parameter& p, const toml::node& n) const {
+    const std::string key = p.full_name();
+    if (!n.is_string()) wrong_type(key, Kind::String, type_name(n));
+    const std::string text = n.as_string()->get();
+    if (p.choices.empty() || std::find(p.choices.begin(), p.choices.end(), text) != p.choices.end()) return text;
+    std::string names;
+    for (const std::string& c : p.choices) names += (names.empty() ? "" : ", ") + c;
+    fail(cfg_.where(key), key + ": must be one of " + names + "; got " + quote(text));
+  }
+
+  template <class T, size_t N>
+  std::array<T, N> array(const std::string& key, const toml::node& n, Kind kind) const {
+    std::array<T, N> out{};
+    for (size_t i = 0; i < N; ++i) {
+      const toml::node& e = element(key, n, kind, N, i);
+      if constexpr (std::is_same_v<T, int>) out[i] = to_int(key, e, kind);
+      else out[i] = to_double(key, e, kind);
+    }
+    return out;
   }
 
   const toml::node& element(const std::string& key, const toml::node& n, Kind kind, size_t len, size_t i) const {
@@ -443,59 +303,9 @@ class Reader {
 };
 
 void read_scene(const Config& cfg, Scene& s) {
-  Reader r(cfg);
-  r.get("name", s.name);
-  r.get("cloth.particles", s.cloth.particles);
-  r.get("cloth.size", s.cloth.size);
-  r.get("cloth.fabric", s.cloth.fabric);
-  r.get("cloth.tile", s.cloth.tile);
-  r.get("cloth.shear", s.cloth.shear);
-  r.get("cloth.clamp", s.cloth.clamp);
-  r.get("cloth.bend_reversal", s.cloth.bend_reversal);
-  r.get("cloth.shear_reversal", s.cloth.shear_reversal);
-  r.get("cloth.stretch_reversal", s.cloth.stretch_reversal);
-  r.get("cloth.compression", s.cloth.compression);
-  r.get("cloth.height", s.cloth.height);
-  r.get("cloth.center", s.cloth.center);
-  r.get_enum("obstacle.shape", s.obstacle.shape,
-             {ObstacleShape::Box, ObstacleShape::Sphere, ObstacleShape::None});
-  r.get("obstacle.center", s.obstacle.center);
-  r.get("obstacle.size", s.obstacle.size);
-  r.get("obstacle.radius", s.obstacle.radius);
-  r.get("obstacle.floor", s.obstacle.floor);
-  r.get("solver.dt", s.solver.dt);
-  r.get("solver.dt_min", s.solver.dt_min);
-  r.get("solver.dt_max", s.solver.dt_max);
-  r.get("solver.steps", s.solver.steps);
-  r.get("solver.max_iterations", s.solver.max_iterations);
-  r.get("solver.tolerance", s.solver.tolerance);
-  r.get_enum("solver.gradient", s.solver.gradient, {GradientMode::Analytic, GradientMode::Numeric});
-  r.get_enum("solver.method", s.solver.method, {SolverMethod::Newton, SolverMethod::Cg});
-  r.get_enum("solver.preconditioner", s.solver.preconditioner, {Preconditioner::Jacobi, Preconditioner::Multigrid});
-  r.get("solver.damping", s.solver.damping);
-  r.get("solver.rest_speed", s.solver.rest_speed);
-  r.get("solver.contact_thickness", s.solver.contact_thickness);
-  r.get("solver.memory", s.solver.memory);
-  r.get("solver.drag", s.solver.drag);
-  r.get("solver.wall_limit", s.solver.wall_limit);
-  r.get("solver.end_time", s.solver.end_time);
-  r.get("output.every", s.output.every);
-  r.get("output.picture", s.output.picture);
-  r.get("output.checkpoint_every", s.output.checkpoint_every);
-  r.get_enum("parallel.schedule", s.parallel.schedule,
-             {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided});
-  r.get("parallel.chunk", s.parallel.chunk);
-  r.get("parallel.threads", s.parallel.threads);
-  r.get("parallel.imbalance", s.parallel.imbalance);
-  r.get("amrc.enabled", s.amrc.enabled);
-  r.get("amrc.max_level", s.amrc.max_level);
-  r.get("amrc.refine", s.amrc.refine);
-  r.get("amrc.coarsen", s.amrc.coarsen);
-  r.get("amrc.every", s.amrc.every);
-  r.get("amrc.coarsen_speed", s.amrc.coarsen_speed);
-  r.get_enum("amrc.indicator", s.amrc.indicator, {AmrcIndicator::Angle, AmrcIndicator::Deflection});
-  r.get("amrc.start_spacing", s.amrc.start_spacing);
-  r.get("amrc.stage_drag", s.amrc.stage_drag);
+  const Reader r(cfg);
+  for (const Parameter& p : schema().all())
+    if (const auto v = r.read(p)) p.set(s, *v);
 }
 
 // ------------------------------------------------------------ validation --
@@ -515,58 +325,46 @@ class Checker {
   const Config& cfg_;
 };
 
-template <class T, size_t N>
-bool all_positive(const std::array<T, N>& a) {
-  return std::all_of(a.begin(), a.end(), [](T v) { return v > 0; });
+
+// Each key's own range, as the schema declares it, in declaration order.
+void check_each_key(const Checker& check, const Scene& s) {
+  for (const Parameter& p : schema().all()) {
+    const std::string why = p.refusal(p.get(s));
+    check(why.empty(), p.full_name(), why);
+  }
 }
 
-void validate(const Config& cfg, const Scene& s) {
-  const Checker check(cfg);
-  const auto got = [](double v) { return ", got " + format_double(v); };
-  const auto& c = s.cloth;
-  check(!s.name.empty(), "name", "must not be empty");
-  check(c.particles[0] >= 3 && c.particles[1] >= 3, "cloth.particles",
-        "NI and NJ must each be >= 3, got " + format_array(c.particles));
+// Finite sizes can still overflow what the physics derives from them: the
+// area, squared edge lengths (stretch and contact square them) and the area
+// a particle stands for (its mass; zero would divide later).
+void check_cloth_extent(const Checker& check, const ClothSpec& c) {
   check(int64_t(c.particles[0]) * c.particles[1] <= kMaxParticles, "cloth.particles",
         "NI x NJ must be at most " + std::to_string(kMaxParticles) + ", got " + format_array(c.particles));
-  check(all_positive(c.size), "cloth.size", "sizes must be > 0, got " + format_array(c.size));
-  {
-    // Finite sizes can still overflow what the physics derives from them: the
-    // area, squared edge lengths (stretch and contact square them) and the
-    // area a particle stands for (its mass; zero would divide later).
-    const double hi = c.size[0] / (c.particles[0] - 1), hj = c.size[1] / (c.particles[1] - 1);
-    check(std::isfinite(c.size[0] * c.size[1]) && std::isfinite(hi * hi) && std::isfinite(hj * hj),
-          "cloth.size", "too large: the cloth's area or squared spacing is not a finite number, got " +
-                            format_array(c.size));
-    check(hi * hj >= DBL_MIN, "cloth.size",
-          "too small: the area per particle underflows to zero, got " + format_array(c.size));
-    const double reach = std::pow(std::fabs(c.center[0]) + 0.5 * c.size[0], 2) +
-                         std::pow(std::fabs(c.center[1]) + 0.5 * c.size[1], 2) + c.height * c.height;
-    check(std::isfinite(reach), check.given("cloth.size", "cloth.center"),
-          "too large: the cloth's squared reach from the origin is not a finite number (cloth.center " +
-              format_array(c.center) + ", cloth.height " + format_double(c.height) + ", cloth.size " +
-              format_array(c.size) + ")");
-  }
-  check(!c.fabric.empty(), "cloth.fabric", "must not be empty");
-  check(c.tile >= 2, "cloth.tile", "must be >= 2, got " + std::to_string(c.tile));
+  const double hi = c.size[0] / (c.particles[0] - 1), hj = c.size[1] / (c.particles[1] - 1);
+  check(std::isfinite(c.size[0] * c.size[1]) && std::isfinite(hi * hi) && std::isfinite(hj * hj),
+        "cloth.size", "too large: the cloth's area or squared spacing is not a finite number, got " +
+                          format_array(c.size));
+  check(hi * hj >= DBL_MIN, "cloth.size",
+        "too small: the area per particle underflows to zero, got " + format_array(c.size));
+  const double reach = std::pow(std::fabs(c.center[0]) + 0.5 * c.size[0], 2) +
+                       std::pow(std::fabs(c.center[1]) + 0.5 * c.size[1], 2) + c.height * c.height;
+  check(std::isfinite(reach), check.given("cloth.size", "cloth.center"),
+        "too large: the cloth's squared reach from the origin is not a finite number (cloth.center " +
+            format_array(c.center) + ", cloth.height " + format_double(c.height) + ", cloth.size " +
+            format_array(c.size) + ")");
+}
+
+void check_cloth_placement(const Checker& check, const Scene& s) {
+  const auto& c = s.cloth;
   check(c.clamp >= 0 && c.clamp < c.particles[0], "cloth.clamp",
         "must be in [0, NI), got " + std::to_string(c.clamp));
-  // At 1 a linear band's force never meets an edge again: no hysteresis.
-  for (const auto& [key, r] : {std::pair{"cloth.bend_reversal", c.bend_reversal},
-                               std::pair{"cloth.shear_reversal", c.shear_reversal}})
-    check(r == 0 || r > 1, key, "must be 0 (the band taken literally) or > 1" + got(r));
-  check(c.stretch_reversal == 0 || c.stretch_reversal >= 1, "cloth.stretch_reversal",
-        "must be 0 (the band taken literally) or >= 1" + got(c.stretch_reversal));
-  check(c.compression >= 0 && c.compression <= 1, "cloth.compression",
-        "must be in [0, 1]" + got(c.compression));
   check(!s.obstacle.floor || c.height >= 0, "cloth.height",
-        "must be >= 0 (the cloth starts above the floor; obstacle.floor = true)" + got(c.height));
+        "must be >= 0 (the cloth starts above the floor; obstacle.floor = true), got " + format_double(c.height));
+}
 
-  const auto& o = s.obstacle;
-  check(all_positive(o.size), "obstacle.size", "sizes must be > 0, got " + format_array(o.size));
-  check(o.radius > 0, "obstacle.radius", "must be > 0" + got(o.radius));
-  // Contact squares distances to the obstacle: its farthest point's squared
-  // distance from the origin must stay finite.
+// Contact squares distances to the obstacle: its farthest point's squared
+// distance from the origin must stay finite.
+void check_obstacle_extent(const Checker& check, const ObstacleSpec& o) {
   double box = 0, ball = 0;
   for (int k = 0; k < 3; ++k) {
     box += std::pow(std::fabs(o.center[k]) + 0.5 * o.size[k], 2);
@@ -578,67 +376,35 @@ void validate(const Config& cfg, const Scene& s) {
   check(std::isfinite(ball), check.given("obstacle.radius", "obstacle.center"),
         "too large: the sphere's squared reach is not a finite number (obstacle.center " +
             format_array(o.center) + ", obstacle.radius " + format_double(o.radius) + ")");
+}
 
-  const auto& v = s.solver;
-  check(v.dt > 0, "solver.dt", "must be > 0" + got(v.dt));
-  check(v.dt_min > 0, "solver.dt_min", "must be > 0" + got(v.dt_min));
-  check(v.dt_max > 0, "solver.dt_max", "must be > 0" + got(v.dt_max));
+void check_time_steps(const Checker& check, const SolverSpec& v) {
   check(v.dt_min <= v.dt_max, check.given("solver.dt_min", "solver.dt_max"),
         "solver.dt_min (" + format_double(v.dt_min) + ") must be <= solver.dt_max (" +
             format_double(v.dt_max) + ")");
   const std::string bound = v.dt < v.dt_min ? "solver.dt_min" : "solver.dt_max";
   check(v.dt_min <= v.dt && v.dt <= v.dt_max, check.given("solver.dt", bound),
         "solver.dt must lie in [solver.dt_min, solver.dt_max] = [" + format_double(v.dt_min) + ", " +
-            format_double(v.dt_max) + "]" + got(v.dt));
-  check(v.steps >= 1, "solver.steps", "must be >= 1, got " + std::to_string(v.steps));
-  check(v.max_iterations >= 1, "solver.max_iterations",
-        "must be >= 1, got " + std::to_string(v.max_iterations));
-  check(v.tolerance > 0, "solver.tolerance", "must be > 0" + got(v.tolerance));
-  check(v.damping >= 0 && v.damping < 1, "solver.damping", "must be in [0, 1)" + got(v.damping));
-  check(v.rest_speed >= 0, "solver.rest_speed", "must be >= 0" + got(v.rest_speed));
-  check(v.memory >= 0, "solver.memory", "must be >= 0" + got(v.memory));
-  check(v.drag >= 0, "solver.drag", "must be >= 0" + got(v.drag));
-  check(v.wall_limit >= 0, "solver.wall_limit", "must be >= 0 (0: no limit)" + got(v.wall_limit));
-  check(v.end_time >= 0, "solver.end_time", "must be >= 0 (0: no limit)" + got(v.end_time));
-  check(v.contact_thickness >= 0, "solver.contact_thickness",
-        "must be >= 0 (0: automatic)" + got(v.contact_thickness));
+            format_double(v.dt_max) + "], got " + format_double(v.dt));
+}
 
-  check(s.output.every >= 0, "output.every", "must be >= 0, got " + std::to_string(s.output.every));
-  check(s.output.checkpoint_every >= 0, "output.checkpoint_every",
-        "must be >= 0 (0: only on a signal or the wall limit), got " +
-            std::to_string(s.output.checkpoint_every));
-  check(s.parallel.chunk >= 1, "parallel.chunk", "must be >= 1, got " + std::to_string(s.parallel.chunk));
-  check(s.parallel.threads >= 0 && s.parallel.threads <= 1024, "parallel.threads",
-        "must be in [0, 1024] (0: OpenMP default), got " + std::to_string(s.parallel.threads));
-  check(s.parallel.imbalance >= 1.0, "parallel.imbalance",
-        "must be >= 1 (max / mean work per rank)" + got(s.parallel.imbalance));
-  const auto& a = s.amrc;
-  check(a.max_level >= 0 && a.max_level <= 10, "amrc.max_level",
-        "must be in [0, 10], got " + std::to_string(a.max_level));
-  check(a.refine > 0, "amrc.refine", "must be > 0 (rad)" + got(a.refine));
+void check_amrc_thresholds(const Checker& check, const AmrcSpec& a) {
   check(a.coarsen >= 0 && a.coarsen < a.refine, check.given("amrc.coarsen", "amrc.refine"),
-        "amrc.coarsen must be in [0, amrc.refine) = [0, " + format_double(a.refine) + ")" + got(a.coarsen));
-  check(a.every >= 1, "amrc.every", "must be >= 1, got " + std::to_string(a.every));
-  check(a.coarsen_speed >= 0, "amrc.coarsen_speed", "must be >= 0 (m/s; 0: no speed condition)" + got(a.coarsen_speed));
-  check(a.start_spacing >= 0, "amrc.start_spacing",
-        "must be >= 0 (m; 0: the run starts on the finest mesh)" + got(a.start_spacing));
-  check(a.stage_drag >= 0, "amrc.stage_drag", "must be >= 0 (1/s)" + got(a.stage_drag));
+        "amrc.coarsen must be in [0, amrc.refine) = [0, " + format_double(a.refine) + "), got " +
+            format_double(a.coarsen));
 }
 
-// ----------------------------------------------------------------- output --
-
-// "key = value  # comment", comments aligned for reading.
-void line(std::ostringstream& os, const char* key, const std::string& value, const char* comment) {
-  std::string kv = std::string(key) + " = " + value;
-  if (*comment) kv.resize(std::max<size_t>(kv.size() + 1, 34), ' '), kv += std::string("# ") + comment;
-  os << kv << "\n";
+// Each key alone first, then what involves several keys (or several
+// elements of one), which may rely on each being in range.
+void validate(const Config& cfg, const Scene& s) {
+  const Checker check(cfg);
+  check_each_key(check, s);
+  check_cloth_extent(check, s.cloth);
+  check_cloth_placement(check, s);
+  check_obstacle_extent(check, s.obstacle);
+  check_time_steps(check, s.solver);
+  check_amrc_thresholds(check, s.amrc);
 }
-
-std::string b(bool v) { return v ? "true" : "false"; }
-
-}  // namespace
-
-namespace {
 
 Scene resolve(Config& cfg, const std::vector<std::string>& overrides) {
   for (const std::string& o : overrides) apply_override(cfg, o);
@@ -691,78 +457,8 @@ void check_particle_mass(const Scene& s, double density, const std::string& fabr
                  format_array(c.particles));
 }
 
-std::string scene_to_toml(const Scene& s) {
-  std::ostringstream os;
-  os << "# drape scene, fully resolved (SI units)\n";
-  line(os, "name", quote(s.name), "");
-  const auto& c = s.cloth;
-  os << "\n[cloth]\n";
-  line(os, "particles", format_array(c.particles), "NI (warp), NJ (weft)");
-  line(os, "size", format_array(c.size), "m along i, j");
-  line(os, "fabric", quote(c.fabric), "name in data/kes/ or a path");
-  line(os, "tile", std::to_string(c.tile), "particles per tile side");
-  line(os, "shear", b(c.shear), "KES shear band");
-  line(os, "clamp", std::to_string(c.clamp), "rows i < clamp held fixed (a platform); 0: none");
-  line(os, "bend_reversal", format_double(c.bend_reversal),
-       "slope inside the bending band / loading slope (0 literal band, > 1 KES reversal)");
-  line(os, "shear_reversal", format_double(c.shear_reversal), "the same for shear");
-  line(os, "stretch_reversal", format_double(c.stretch_reversal),
-       "stretch: the same (1: along the loading curve's slope)");
-  line(os, "compression", format_double(c.compression),
-       "compressive modulus / the tensile test's Fm/EMT (0: no resistance)");
-  line(os, "height", format_double(c.height), "m, z of the flat cloth at t = 0");
-  line(os, "center", format_array(c.center), "m, x-y of the cloth centre");
-  const auto& o = s.obstacle;
-  os << "\n[obstacle]\n";
-  line(os, "shape", quote(to_string(o.shape)), "box | sphere | none");
-  line(os, "center", format_array(o.center), "m");
-  line(os, "size", format_array(o.size), "m, box edge lengths");
-  line(os, "radius", format_double(o.radius), "m, sphere");
-  line(os, "floor", b(o.floor), "plane z = 0");
-  const auto& v = s.solver;
-  os << "\n[solver]\n";
-  line(os, "dt", format_double(v.dt), "s, first step (adaptive afterwards)");
-  line(os, "dt_min", format_double(v.dt_min), "s");
-  line(os, "dt_max", format_double(v.dt_max), "s");
-  line(os, "steps", std::to_string(v.steps), "time steps at most");
-  line(os, "max_iterations", std::to_string(v.max_iterations), "CG iterations per step at most");
-  line(os, "tolerance", format_double(v.tolerance), "cost per active particle");
-  line(os, "gradient", quote(to_string(v.gradient)), "analytic | numeric");
-  line(os, "method", quote(to_string(v.method)), "newton (Newton + linear CG) | cg (the paper's nonlinear CG)");
-  line(os, "preconditioner", quote(to_string(v.preconditioner)),
-       "newton's linear CG: jacobi | multigrid (one rank)");
-  line(os, "damping", format_double(v.damping), "fraction of velocity removed per step");
-  line(os, "rest_speed", format_double(v.rest_speed), "m/s; > 0 stops once at rest");
-  line(os, "contact_thickness", format_double(v.contact_thickness), "m; 0 = automatic");
-  line(os, "memory", format_double(v.memory), "weight of the force memory (hysteresis) term");
-  line(os, "drag", format_double(v.drag), "1/s: air drag, a force -drag*m*v on each particle");
-  line(os, "wall_limit", format_double(v.wall_limit), "s; stop stepping after this long (0: no limit)");
-  line(os, "end_time", format_double(v.end_time), "s of simulated time; stop once reached (0: no limit)");
-  os << "\n[output]\n";
-  line(os, "every", std::to_string(s.output.every), "frame every N steps (0: final only)");
-  line(os, "picture", b(s.output.picture), "drape.png of the final state");
-  line(os, "checkpoint_every", std::to_string(s.output.checkpoint_every),
-       "checkpoint.h5 every N steps and at the end (0: on a signal or the wall limit only)");
-  const auto& p = s.parallel;
-  os << "\n[parallel]\n";
-  line(os, "schedule", quote(to_string(p.schedule)), "active-lists | static | dynamic | guided");
-  line(os, "chunk", std::to_string(p.chunk), "tiles per chunk (dynamic schedule)");
-  line(os, "threads", std::to_string(p.threads), "0: OMP_NUM_THREADS / OpenMP default");
-  line(os, "imbalance", format_double(p.imbalance), "max / mean work per rank that triggers a rebalance after AMRC");
-  const auto& a = s.amrc;
-  os << "\n[amrc]\n";
-  line(os, "enabled", b(a.enabled), "adaptive refinement and coarsening");
-  line(os, "max_level", std::to_string(a.max_level), "coarsest leaves span 2^max_level intervals");
-  line(os, "refine", format_double(a.refine), "rad: split where a triple turns more");
-  line(os, "coarsen", format_double(a.coarsen), "rad: merge where all turn less (< refine)");
-  line(os, "every", std::to_string(a.every), "steps between adaptations");
-  line(os, "coarsen_speed", format_double(a.coarsen_speed), "m/s: merge only where all are slower (0: off)");
-  line(os, "indicator", quote(to_string(a.indicator)),
-       "angle | deflection (the angle times the leaf's width over the coarsest's)");
-  line(os, "start_spacing", format_double(a.start_spacing),
-       "m: start this coarse (AMRC: leaves this wide; else refine at each rest); 0: finest");
-  line(os, "stage_drag", format_double(a.stage_drag), "1/s: air drag on every mesh while grid sequencing");
-  return os.str();
-}
+std::string scene_to_toml(const Scene& s) { return parameters_to_toml(schema(), s); }
+
+std::string scene_reference() { return parameters_to_markdown(schema(), Scene{}); }
 
 }  // namespace drape

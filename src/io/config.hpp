@@ -31,4 +31,8 @@ void check_particle_mass(const Scene& s, double density, const std::string& fabr
 // The resolved scene as TOML text (what --dry-run prints; also stored in outputs).
 std::string scene_to_toml(const Scene& s);
 
+// The reference of every scene key as markdown tables (key, default, unit,
+// allowed values, meaning): what docs/configuration.md shows.
+std::string scene_reference();
+
 }  // namespace drape

@@ -1,0 +1,179 @@
+// The scene's keys: one declaration each, binding the TOML key to its Scene
+// member with unit, allowed values, the comment --dry-run prints and the
+// reference's meaning. A new key is a member in solver/scene.hpp and a line
+// here; checks that involve two keys are in config.cpp's validate().
+// The order is the order of --dry-run's text and of the reference.
+#include "io/scene_schema.hpp"
+
+namespace drape {
+namespace {
+
+void declare_cloth(ParameterList& list) {
+  list.section("cloth", &Scene::cloth)
+      .add("particles", &ClothSpec::particles, "", each_of("NI and NJ", at_least(3)), "NI (warp), NJ (weft)",
+           "NI (warp, i) × NJ (weft, j) particles of the finest grid")
+      .add("size", &ClothSpec::size, "m", all_of("sizes", positive()), "m along i, j",
+           "along i and j; rest spacing h = size / (N − 1)")
+      .add("fabric", &ClothSpec::fabric, "", non_empty(), "name in data/kes/ or a path",
+           "a fabric in `data/kes/` by name (or `$DRAPE_DATA/kes`), or a path to a `.toml`")
+      .add("tile", &ClothSpec::tile, "", at_least(2), "particles per tile side",
+           "particles per tile side: the unit of ownership, partitioning and migration across ranks; "
+           "at most as many ranks as tiles")
+      .add("shear", &ClothSpec::shear, "", any(), "KES shear band",
+           "the KES shear band (G, 2HG); `false` leaves shear free")
+      .add("clamp", &ClothSpec::clamp, "", any(), "rows i < clamp held fixed (a platform); 0: none",
+           "rows i < clamp held fixed (a platform, Peirce's test); in [0, NI)")
+      .add("bend_reversal", &ClothSpec::bend_reversal, "", zero_or(above(1), "the band taken literally"),
+           "slope inside the bending band / loading slope (0 literal band, > 1 KES reversal)",
+           "slope of the moment inside the KES bending band, as a multiple of the band's: 0 is the band "
+           "taken literally, whose loop runs backwards and feeds the cloth energy; > 1 crosses the band "
+           "and dissipates, as measured loops do")
+      .add("shear_reversal", &ClothSpec::shear_reversal, "", zero_or(above(1), "the band taken literally"),
+           "the same for shear", "the same for the shear band")
+      .add("stretch_reversal", &ClothSpec::stretch_reversal, "", zero_or(at_least(1), "the band taken literally"),
+           "stretch: the same (1: along the loading curve's slope)",
+           "the same for stretch (1 moves along the loading curve)")
+      .add("compression", &ClothSpec::compression, "", in_closed(0, 1),
+           "compressive modulus / the tensile test's Fm/EMT (0: no resistance)",
+           "in-plane compression, which KES does not measure: a branch reaching this fraction of the "
+           "tensile test's Fm/EMT over EMT/2 of shortening; 0 carries no force, and edges may collapse "
+           "where the cloth gathers")
+      .add("height", &ClothSpec::height, "m", any(), "m, z of the flat cloth at t = 0",
+           "z of the flat cloth at t = 0 (the default box's top is at 0.4); ≥ 0 when there is a floor")
+      .add("center", &ClothSpec::center, "m", any(), "m, x-y of the cloth centre", "x-y of the cloth's centre");
+}
+
+void declare_obstacle(ParameterList& list) {
+  list.section("obstacle", &Scene::obstacle)
+      .add("shape", &ObstacleSpec::shape, {ObstacleShape::Box, ObstacleShape::Sphere, ObstacleShape::None},
+           "box | sphere | none", "what the cloth falls on (besides the floor)")
+      .add("center", &ObstacleSpec::center, "m", any(), "m", "the box's (or sphere's) centre")
+      .add("size", &ObstacleSpec::size, "m", all_of("sizes", positive()), "m, box edge lengths",
+           "the box's edge lengths along x, y, z")
+      .add("radius", &ObstacleSpec::radius, "m", positive(), "m, sphere", "the sphere's radius")
+      .add("floor", &ObstacleSpec::floor, "", any(), "plane z = 0", "a floor plane at z = 0");
+}
+
+void declare_solver(ParameterList& list) {
+  list.section("solver", &Scene::solver)
+      .add("dt", &SolverSpec::dt, "s", positive(), "s, first step (adaptive afterwards)",
+           "the first time step; adapted afterwards to keep iterations per step bounded, within "
+           "[dt_min, dt_max]")
+      .add("dt_min", &SolverSpec::dt_min, "s", positive(), "s",
+           "a step that has not converged at this dt (or after 8 halvings) is accepted as unconverged "
+           "(`unconverged_steps`)")
+      .add("dt_max", &SolverSpec::dt_max, "s", positive(), "s", "the longest time step; ≥ dt_min")
+      .add("steps", &SolverSpec::steps, "", at_least(1), "time steps at most",
+           "time steps at most; rest, `end_time` or `wall_limit` usually ends the run first")
+      .add("max_iterations", &SolverSpec::max_iterations, "", at_least(1), "CG iterations per step at most",
+           "CG iterations per step attempt at most; a step that reaches it is retried with half the step")
+      .add("tolerance", &SolverSpec::tolerance, "", positive(), "cost per active particle",
+           "a step has converged when the cost per free particle is below this")
+      .add("gradient", &SolverSpec::gradient, {GradientMode::Analytic, GradientMode::Numeric},
+           "analytic | numeric", "`numeric`: finite differences, the paper's way (one rank only, no AMRC)")
+      .add("method", &SolverSpec::method, {SolverMethod::Newton, SolverMethod::Cg},
+           "newton (Newton + linear CG) | cg (the paper's nonlinear CG)",
+           "`newton`: Newton steps on the force balance, each solved by preconditioned linear CG; `cg`: "
+           "the paper's nonlinear CG on the total cost. Both stop at the same cost "
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))")
+      .add("preconditioner", &SolverSpec::preconditioner, {Preconditioner::Jacobi, Preconditioner::Multigrid},
+           "newton's linear CG: jacobi | multigrid (one rank)",
+           "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
+           "grid's levels: iterations flat in the spacing; one rank only) ([design.md §7](design.md))")
+      .add("damping", &SolverSpec::damping, "", in_half_open(0, 1), "fraction of velocity removed per step",
+           "fraction of the velocity removed after each step")
+      .add("rest_speed", &SolverSpec::rest_speed, "m/s", non_negative(), "m/s; > 0 stops once at rest",
+           "> 0 ends the run once every particle is slower for 3 steps (and at least 2·rest_speed/g of "
+           "time); 0: never at rest")
+      .add("contact_thickness", &SolverSpec::contact_thickness, "m", non_negative().with_note("0: automatic"),
+           "m; 0 = automatic", "the contact layer; 0: half a grid spacing")
+      .add("memory", &SolverSpec::memory, "", non_negative(), "weight of the force memory (hysteresis) term",
+           "weight of the memory term that pulls each force to its hysteresis target")
+      .add("drag", &SolverSpec::drag, "1/s", non_negative(), "1/s: air drag, a force -drag*m*v on each particle",
+           "air drag −drag·m·v in each particle's equation; with grid sequencing on, every mesh runs with "
+           "max(drag, `amrc.stage_drag`)")
+      .add("wall_limit", &SolverSpec::wall_limit, "s", non_negative().with_note("0: no limit"),
+           "s; stop stepping after this long (0: no limit)",
+           "wall time of stepping at most; the run then ends cleanly with a checkpoint")
+      .add("end_time", &SolverSpec::end_time, "s", non_negative().with_note("0: no limit"),
+           "s of simulated time; stop once reached (0: no limit)", "simulated time at most");
+}
+
+void declare_output(ParameterList& list) {
+  list.section("output", &Scene::output)
+      .add("every", &OutputSpec::every, "", non_negative(), "frame every N steps (0: final only)",
+           "a frame in `drape.h5` every N steps (0: the final state only); at 1000 × 1000 a frame is 67 MB")
+      .add("picture", &OutputSpec::picture, "", any(), "drape.png of the final state",
+           "`drape.png` of the final state")
+      .add("checkpoint_every", &OutputSpec::checkpoint_every, "",
+           non_negative().with_note("0: only on a signal or the wall limit"),
+           "checkpoint.h5 every N steps and at the end (0: on a signal or the wall limit only)",
+           "`checkpoint.h5` every N steps and at the end");
+}
+
+void declare_parallel(ParameterList& list) {
+  list.section("parallel", &Scene::parallel)
+      .add("schedule", &ParallelSpec::schedule,
+           {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided},
+           "active-lists | static | dynamic | guided",
+           "`active-lists` (the paper's), or a `static`, `dynamic` or `guided` schedule over tiles")
+      .add("chunk", &ParallelSpec::chunk, "", at_least(1), "tiles per chunk (dynamic schedule)",
+           "tiles per chunk for the dynamic schedule")
+      .add("threads", &ParallelSpec::threads, "", in_closed(0, 1024).with_note("0: OpenMP default"),
+           "0: OMP_NUM_THREADS / OpenMP default",
+           "OpenMP threads per rank; 0: `OMP_NUM_THREADS` (or `--threads`)")
+      .add("imbalance", &ParallelSpec::imbalance, "", at_least(1).with_note("max / mean work per rank"),
+           "max / mean work per rank that triggers a rebalance after AMRC",
+           "after a mesh change, max/mean work per rank above which tiles move");
+}
+
+void declare_amrc(ParameterList& list) {
+  list.section("amrc", &Scene::amrc)
+      .add("enabled", &AmrcSpec::enabled, "", any(), "adaptive refinement and coarsening",
+           "adaptive refinement and coarsening ([design.md §2](design.md#2-amrc-and-grid-sequencing))")
+      .add("max_level", &AmrcSpec::max_level, "", in_closed(0, 10), "coarsest leaves span 2^max_level intervals",
+           "coarsest leaves span 2^max_level intervals")
+      .add("refine", &AmrcSpec::refine, "rad", positive().with_note("rad"), "rad: split where a triple turns more",
+           "a leaf splits where a mesh line turns more at one of its triples")
+      .add("coarsen", &AmrcSpec::coarsen, "rad", any(), "rad: merge where all turn less (< refine)",
+           "four children merge where all turn less; in [0, refine)")
+      .add("every", &AmrcSpec::every, "", at_least(1), "steps between adaptations", "steps between adaptations")
+      .add("coarsen_speed", &AmrcSpec::coarsen_speed, "m/s", non_negative().with_note("m/s; 0: no speed condition"),
+           "m/s: merge only where all are slower (0: off)",
+           "children merge only where every particle is also slower; 0: off (the paper's criterion)")
+      .add("indicator", &AmrcSpec::indicator, {AmrcIndicator::Angle, AmrcIndicator::Deflection},
+           "angle | deflection (the angle times the leaf's width over the coarsest's)",
+           "`angle`: thresholds against the turning angle; `deflection`: against the angle times the "
+           "leaf's width over the coarsest leaf's")
+      .add("start_spacing", &AmrcSpec::start_spacing, "m",
+           non_negative().with_note("m; 0: the run starts on the finest mesh"),
+           "m: start this coarse (AMRC: leaves this wide; else refine at each rest); 0: finest",
+           "AMRC off: grid sequencing, the run starts on a uniform mesh at most this coarse and refines "
+           "everywhere each time the cloth is at rest; AMRC on: every leaf starts this wide (at most "
+           "`max_level`)")
+      .add("stage_drag", &AmrcSpec::stage_drag, "1/s", non_negative().with_note("1/s"),
+           "1/s: air drag on every mesh while grid sequencing",
+           "air drag on every mesh while grid sequencing (the meshes lead to the rest state, and drag "
+           "vanishes at rest); `report.json` `stage_drag`");
+}
+
+ParameterList declare() {
+  ParameterList list;
+  list.top().add("name", &Scene::name, "", non_empty(), "", "the scene's name, in the output");
+  declare_cloth(list);
+  declare_obstacle(list);
+  declare_solver(list);
+  declare_output(list);
+  declare_parallel(list);
+  declare_amrc(list);
+  return list;
+}
+
+}  // namespace
+
+const ParameterList& scene_parameters() {
+  static const ParameterList list = declare();
+  return list;
+}
+
+}  // namespace drape
