@@ -53,17 +53,26 @@ model = json.load(open(model_path)) if os.path.exists(model_path) else None
 study["model"] = model
 
 
-def seconds(size, parts):
+def seconds(model, size, parts):
     for c in model["cases"]:
         if c["size"] == size and c["parts"] == parts and "iteration_seconds_modelled" in c:
             return c["iteration_seconds_modelled"]
     return None
 
 
-if model:
+# Bytes a particle today, from the one-rank run; a rank that held only its
+# tiles and ghosts would need about that many for each (an upper bound: the
+# largest owned count and the largest ghost count may be on different ranks).
+one = [r for r in study["memory_measured"] if r["ranks"] == 1 and "peak_rss_bytes_max" in r]
+per_particle = one[0]["peak_rss_bytes_max"] / one[0]["size"] ** 2 if one else 2400.0
+study["bytes_per_particle_measured_1_rank"] = per_particle
+def efficiencies(model):
+    """Strong (1000^2 and 4000^2 on 1..1024 ranks) and weak (250k particles a
+    rank: 500^2 on 1, 1000^2 on 4, ... 16000^2 on 1024) from the modelled
+    iteration times."""
     strong = {}
     for size in (1000, 4000):
-        t1 = seconds(size, 1)
+        t1 = seconds(model, size, 1)
         rows = []
         for c in model["cases"]:
             if c["size"] == size and t1 and "iteration_seconds_modelled" in c:
@@ -72,14 +81,26 @@ if model:
                              "efficiency": t1 / (p * c["iteration_seconds_modelled"])})
         strong[str(size)] = rows
     weak = []
-    t1 = seconds(500, 1)
+    t1 = seconds(model, 500, 1)
     for p in (1, 4, 16, 64, 256, 1024):
         size = int(round(500 * math.sqrt(p)))
-        t = seconds(size, p)
+        t = seconds(model, size, p)
         if t1 and t:
             weak.append({"ranks": p, "size": size, "seconds": t, "efficiency": t1 / t})
-    study["strong_modelled"] = strong
-    study["weak_modelled"] = weak
+    return strong, weak
+
+
+if model:
+    for c in model["cases"]:
+        c["rank_memory_if_local_bytes_modelled"] = per_particle * (c["owned_particles"]["max"] + c["ghost_particles"]["max"])
+    study["strong_modelled"], study["weak_modelled"] = efficiencies(model)
+cluster_path = os.path.join(out, "scale_model_cluster.json")
+cluster = json.load(open(cluster_path)) if os.path.exists(cluster_path) else None
+if cluster:
+    strong, weak = efficiencies(cluster)
+    study["cluster_network_assumed"] = {"alpha_seconds": cluster["alpha_seconds"],
+                                        "beta_bytes_per_second": cluster["beta_bytes_per_second"],
+                                        "strong_modelled": strong, "weak_modelled": weak}
 
 json.dump(study, open(os.path.join(out, "scale_study.json"), "w"), indent=1)
 
@@ -99,26 +120,40 @@ if model:
             pp["alpha_seconds"], 1e-9 * pp["beta_bytes_per_second"], model["product_seconds_per_particle"],
             model["vector_seconds_per_particle"]))
     print("modelled: per case (max over ranks / mean)")
-    print("| cloth | ranks | imbalance | edge cut | ghosts max/mean | halo kB/CG it. max/mean | neighbours max/mean | fold band: method, tiles, MB | it. [ms] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| cloth | ranks | imbalance | edge cut | ghosts max/mean | halo kB/CG it. max/mean | neighbours max/mean | fold band: method, tiles, MB | it. [ms] | rank memory if local [MB] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for c in model["cases"]:
         m = c["fold_band_migration"]
-        print("| %d | %d | %.3f | %d | %.0f / %.0f | %.1f / %.1f | %.0f / %.1f | %s, %d, %.1f | %s |" % (
+        print("| %d | %d | %.3f | %d | %.0f / %.0f | %.1f / %.1f | %.0f / %.1f | %s, %d, %.1f | %s | %.0f |" % (
             c["size"], c["parts"], c["imbalance"], c["edge_cut"], c["ghost_particles"]["max"],
             c["ghost_particles"]["mean"], 1e-3 * c["halo_bytes_cg_iteration"]["max"],
             1e-3 * c["halo_bytes_cg_iteration"]["mean"], c["neighbours"]["max"], c["neighbours"]["mean"],
             m["method"], m["tiles_moved"], 1e-6 * m["bytes"],
-            "%.3f" % (1e3 * c["iteration_seconds_modelled"]) if "iteration_seconds_modelled" in c else "-"))
+            "%.3f" % (1e3 * c["iteration_seconds_modelled"]) if "iteration_seconds_modelled" in c else "-",
+            1e-6 * c["rank_memory_if_local_bytes_modelled"]))
     for size, rows in study.get("strong_modelled", {}).items():
         print("modelled strong scaling %s^2: " % size + ", ".join("%d: %.2f" % (r["ranks"], r["efficiency"]) for r in rows))
     print("modelled weak scaling (250k particles a rank): " +
           ", ".join("%d: %.2f" % (r["ranks"], r["efficiency"]) for r in study.get("weak_modelled", [])))
+    cl = study.get("cluster_network_assumed")
+    if cl:
+        for size, rows in cl["strong_modelled"].items():
+            print("assumed network (2 us, 10 GB/s), strong %s^2: " % size +
+                  ", ".join("%d: %.2f" % (r["ranks"], r["efficiency"]) for r in rows))
+        print("assumed network (2 us, 10 GB/s), weak: " +
+              ", ".join("%d: %.2f" % (r["ranks"], r["efficiency"]) for r in cl["weak_modelled"]))
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
     for size, rows in study.get("strong_modelled", {}).items():
         ax1.plot([r["ranks"] for r in rows], [r["efficiency"] for r in rows], "o-", label="strong, %s^2" % size)
     w = study.get("weak_modelled", [])
     ax1.plot([r["ranks"] for r in w], [r["efficiency"] for r in w], "s-", label="weak, 250k a rank")
+    if cl:
+        for size, rows in cl["strong_modelled"].items():
+            ax1.plot([r["ranks"] for r in rows], [r["efficiency"] for r in rows], "o--",
+                     label="strong, %s^2, 2 us network (assumed)" % size)
+        w = cl["weak_modelled"]
+        ax1.plot([r["ranks"] for r in w], [r["efficiency"] for r in w], "s--", label="weak, 2 us network (assumed)")
     ax1.set_xscale("log", base=2)
     ax1.set_xlabel("ranks")
     ax1.set_ylabel("efficiency (modelled)")
