@@ -9,9 +9,11 @@
 // bandwidth here; with the compute time per particle and CG iteration
 // (measured by bench_gradient, passed in), the time of a Newton-CG iteration
 // is projected for strong and weak scaling. Partitions and counts are exact;
-// times past 2 ranks are a model.
+// iteration times are a model built on those measured inputs. On one rank,
+// --alpha and --beta stand in for the ping-pong.
 //   mpirun -n 2 scale_model [--sizes 1000,2000] [--parts 4,16] [--json FILE]
 //                           [--product-seconds S --vector-seconds S]
+//   scale_model [...] --alpha S --beta BYTES_PER_S
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
@@ -64,7 +66,8 @@ std::vector<int64_t> fine_work(const Scene& base, const Tiling& tl) {
   const bool small = tl.nti <= 3 && tl.ntj <= 3;
   Scene s = base;
   const int last_i = tl.ni - (tl.nti - 1) * tl.t, last_j = tl.nj - (tl.ntj - 1) * tl.t;
-  s.cloth.particles = small ? std::array<int, 2>{tl.ni, tl.nj} : std::array<int, 2>{2 * tl.t + last_i, 2 * tl.t + last_j};
+  s.cloth.particles = small ? std::array<int, 2>{tl.ni, tl.nj}
+                             : std::array<int, 2>{2 * tl.t + last_i, 2 * tl.t + last_j};
   World w(s, load_fabric(s.cloth.fabric));
   const std::vector<int64_t> each = tile_work(w.cloth, w.tiling);
   if (small) return each;
@@ -185,7 +188,9 @@ void write_case(Json& j, const Tiling& tl, const Partition& p, const HaloCensus&
     cg_bytes[r] = h.sent[r] * kBytesPerCgIteration;
     grad_bytes[r] = h.sent[r] * kBytesPerGradient;
   }
-  auto both = [&](const char* key, Spread s) { j.begin_object(key).value("max", s.max).value("mean", s.mean).end_object(); };
+  auto both = [&](const char* key, Spread s) {
+    j.begin_object(key).value("max", s.max).value("mean", s.mean).end_object();
+  };
   j.begin_object();
   j.value("size", tl.ni).value("particles", (long long)tl.ni * tl.nj).value("tiles", tl.count());
   j.value("parts", parts).value("imbalance", p.imbalance).value("edge_cut", (long long)p.edge_cut);
@@ -219,9 +224,11 @@ std::string model(const Settings& st, const Network& net, const PingPong* pp) {
   const double threshold = base.parallel.imbalance;
   Json j;
   j.begin_object();
-  j.value("measured", pp ? "alpha and beta: ping-pong between 2 ranks here; compute seconds per particle: bench_gradient"
-                        : "alpha and beta given (no ping-pong); compute seconds per particle given");
-  j.value("modelled", "partitions, halo and migration counts are exact for the design; iteration times past 2 ranks are a latency-bandwidth model");
+  j.value("measured", pp ? "alpha and beta: ping-pong between 2 ranks here; compute seconds per particle: given "
+                             "(run/scale_study measures them with bench_gradient)"
+                           : "alpha and beta given (no ping-pong); compute seconds per particle given");
+  j.value("modelled", "partitions, halo and migration counts are exact for the design; "
+                      "iteration times are a latency-bandwidth model");
   j.value("tile", tile).value("imbalance_threshold", threshold);
   j.value("bytes_per_particle_cg_iteration", (long long)kBytesPerCgIteration);
   j.value("bytes_per_particle_gradient", (long long)kBytesPerGradient);
@@ -275,17 +282,21 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   Settings st;
-  CLI::App app{"scale_model: partitions, halos and migration to 1024 ranks, and a latency-bandwidth projection"};
+  CLI::App app{"scale_model: partitions, halos and migration to 1024 ranks, and a latency-bandwidth "
+               "projection"};
   app.option_defaults()->always_capture_default();
   app.add_option("--sizes", st.sizes, "particles per side of each square cloth")->delimiter(',')
       ->check(CLI::Range(2, 100000));
   app.add_option("--parts", st.parts, "part counts (ranks)")->delimiter(',')->check(CLI::Range(1, 1 << 20));
   app.add_option("--product-seconds", st.product_seconds, "one stiffness product, seconds per particle")
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--vector-seconds", st.vector_seconds, "one CG iteration's vector passes, seconds per particle")
+  app.add_option("--vector-seconds", st.vector_seconds,
+                 "one CG iteration's vector passes, seconds per particle")
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--alpha", st.alpha, "latency, s, where no ping-pong runs (one rank)")->check(CLI::Range(0.0, 1.0));
-  app.add_option("--beta", st.beta, "bandwidth, bytes/s, where no ping-pong runs (one rank)")->check(CLI::Range(0.0, 1e15));
+  app.add_option("--alpha", st.alpha, "latency, s, where no ping-pong runs (one rank)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--beta", st.beta, "bandwidth, bytes/s, where no ping-pong runs (one rank)")
+      ->check(CLI::Range(0.0, 1e15));
   app.add_option("--json", st.json, "write the figures here (default: stdout)");
   try {
     app.parse(argc, argv);

@@ -29,7 +29,8 @@ void expect_census_matches_exchange(const std::vector<int>& owner, int width) {
 }
 
 TEST(HaloCensus, MatchesTheExchangeOnMetisParts) {
-  const Partition p = partition_graph(kTiling, std::vector<int64_t>(kTiling.count(), 10), size_of(MPI_COMM_WORLD));
+  const std::vector<int64_t> work(kTiling.count(), 10);
+  const Partition p = partition_graph(kTiling, work, size_of(MPI_COMM_WORLD));
   expect_census_matches_exchange(p.owner, 2);
 }
 

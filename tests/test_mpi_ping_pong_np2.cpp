@@ -30,5 +30,18 @@ TEST(PingPong, FitRecoversAKnownLine) {
   EXPECT_NEAR(p.beta, 5e9, 1e3);
 }
 
+TEST(PingPong, ARankThatLostItsCoreDoesNotSetTheLatency) {
+  PingPong p;
+  for (int64_t b = 8; b <= (1 << 20); b *= 4) {
+    p.bytes.push_back(b);
+    p.seconds.push_back(2e-6 + double(b) / 5e9);
+  }
+  p.seconds[0] = 4e-4;  // 8 bytes took a scheduler's time slice
+  p.seconds[2] = 3e-4;
+  fit_latency_bandwidth(p);
+  EXPECT_LT(p.alpha, 3e-6);
+  EXPECT_NEAR(p.beta, 5e9, 5e8);
+}
+
 }  // namespace
 }  // namespace drape::test

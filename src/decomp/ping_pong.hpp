@@ -4,7 +4,8 @@
 // back and forth between ranks 0 and 1; half the best round trip is the
 // one-way time, and a line t = alpha + bytes / beta is fitted to those
 // times (least squares in relative error, so the small messages weigh as
-// much as the large ones). Other ranks only wait at the closing barrier.
+// much as the large ones, and a time a rank lost its core in hardly at all).
+// Other ranks only wait at the barriers.
 #include <mpi.h>
 
 #include <cstdint>
@@ -20,7 +21,8 @@ struct PingPong {
 };
 
 // Collective over `comm` (at least 2 ranks). Sizes from `smallest` to
-// `largest` bytes, doubling; each timed `repeats` times after one warm-up.
+// `largest` bytes, doubling; each timed `repeats` times after one warm-up
+// (10 times as often up to 64 KiB).
 // Every rank returns rank 0's figures.
 PingPong ping_pong(MPI_Comm comm, int64_t smallest = 8, int64_t largest = 8 << 20, int repeats = 20);
 
