@@ -144,16 +144,20 @@ if model:
               ", ".join("%d: %.2f" % (r["ranks"], r["efficiency"]) for r in cl["weak_modelled"]))
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    colour = {"1000": "C0", "4000": "C1", "weak": "C2"}  # one per series, solid here, dashed assumed
     for size, rows in study.get("strong_modelled", {}).items():
-        ax1.plot([r["ranks"] for r in rows], [r["efficiency"] for r in rows], "o-", label="strong, %s^2" % size)
+        ax1.plot([r["ranks"] for r in rows], [r["efficiency"] for r in rows], "o-", color=colour[size],
+                 label="strong, %s^2" % size)
     w = study.get("weak_modelled", [])
-    ax1.plot([r["ranks"] for r in w], [r["efficiency"] for r in w], "s-", label="weak, 250k a rank")
+    ax1.plot([r["ranks"] for r in w], [r["efficiency"] for r in w], "s-", color=colour["weak"],
+             label="weak, 250k a rank")
     if cl:
         for size, rows in cl["strong_modelled"].items():
-            ax1.plot([r["ranks"] for r in rows], [r["efficiency"] for r in rows], "o--",
-                     label="strong, %s^2, 2 us network (assumed)" % size)
+            ax1.plot([r["ranks"] for r in rows], [r["efficiency"] for r in rows], "o--", color=colour[size],
+                     alpha=0.6, label="strong, %s^2, 2 us network (assumed)" % size)
         w = cl["weak_modelled"]
-        ax1.plot([r["ranks"] for r in w], [r["efficiency"] for r in w], "s--", label="weak, 2 us network (assumed)")
+        ax1.plot([r["ranks"] for r in w], [r["efficiency"] for r in w], "s--", color=colour["weak"], alpha=0.6,
+                 label="weak, 2 us network (assumed)")
     ax1.set_xscale("log", base=2)
     ax1.set_xlabel("ranks")
     ax1.set_ylabel("efficiency (modelled)")
