@@ -5,6 +5,12 @@
 set -euo pipefail
 model=$1 work=$2
 rm -rf "$work" && mkdir -p "$work"
+# A bad flag is refused (exit 2) before any case runs.
+for bad in "--parts 0" "--sizes ten" "--bogus 1"; do
+  status=0
+  timeout 60 "$model" $bad > "$work/refused.out" 2>&1 || status=$?
+  [[ $status == 2 ]] || { echo "FAIL: scale_model $bad: exit $status, want 2"; cat "$work/refused.out"; exit 1; }
+done
 "$model" --sizes 256 --parts 4,16 --product-seconds 2e-7 --vector-seconds 2e-8 --alpha 1e-6 --beta 1e9 --json "$work/model.json" 2> "$work/stderr"
 /usr/bin/python3 - "$work/model.json" <<'PY'
 import json, sys
