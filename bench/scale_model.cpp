@@ -62,15 +62,13 @@ struct Settings {
 // clipped as the large cloth's) has every kind, and each large tile takes
 // the work of its kind.
 std::vector<int64_t> fine_work(const Scene& base, const Tiling& tl) {
-  auto kind = [](int k, int count) { return k == 0 ? 0 : k == count - 1 ? 2 : 1; };
-  const bool small = tl.nti <= 3 && tl.ntj <= 3;
+  // Along each side: up to 3 tiles as they are, else first, inner, last.
+  auto kind = [](int k, int count) { return count <= 3 || k == 0 ? k : k == count - 1 ? 2 : 1; };
+  auto side = [&](int n, int count) { return count <= 3 ? n : 2 * tl.t + (n - (count - 1) * tl.t); };
   Scene s = base;
-  const int last_i = tl.ni - (tl.nti - 1) * tl.t, last_j = tl.nj - (tl.ntj - 1) * tl.t;
-  s.cloth.particles = small ? std::array<int, 2>{tl.ni, tl.nj}
-                             : std::array<int, 2>{2 * tl.t + last_i, 2 * tl.t + last_j};
+  s.cloth.particles = {side(tl.ni, tl.nti), side(tl.nj, tl.ntj)};
   World w(s, load_fabric(s.cloth.fabric));
   const std::vector<int64_t> each = tile_work(w.cloth, w.tiling);
-  if (small) return each;
   std::vector<int64_t> work(tl.count());
   for (int t = 0; t < tl.count(); ++t) {
     const int ki = kind(t / tl.ntj, tl.nti), kj = kind(t % tl.ntj, tl.ntj);
