@@ -62,6 +62,10 @@ std::vector<int> relabel_to_overlap(const std::vector<int>& old_owner, const std
   return out;
 }
 
+int64_t tile_migration_bytes(const Tiling& tl, int t) {
+  return tile_particles(tl, t) * kPerParticle * int64_t(sizeof(double));
+}
+
 MigrationStats migrate_tiles(Cloth& c, const Tiling& tl, const std::vector<int>& old_owner,
                              const std::vector<int>& new_owner, MPI_Comm comm) {
   int me = 0;
@@ -72,7 +76,7 @@ MigrationStats migrate_tiles(Cloth& c, const Tiling& tl, const std::vector<int>&
   for (int t = 0; t < tl.count(); ++t) {
     if (old_owner[t] == new_owner[t]) continue;
     ++st.tiles_moved;
-    st.bytes += tile_particles(tl, t) * kPerParticle * int64_t(sizeof(double));
+    st.bytes += tile_migration_bytes(tl, t);
     if (old_owner[t] == me) out[new_owner[t]].push_back(t);
     if (new_owner[t] == me) in[old_owner[t]].push_back(t);
   }

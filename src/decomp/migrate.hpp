@@ -25,6 +25,9 @@ struct MigrationStats {
 std::vector<int> relabel_to_overlap(const std::vector<int>& old_owner, const std::vector<int>& fresh,
                                     const std::vector<int64_t>& work, int ranks);
 
+// Bytes a tile's migration sends (its particles' z, history, flags, level).
+int64_t tile_migration_bytes(const Tiling& tiling, int tile);
+
 // Collective: moves every tile whose owner differs between the two maps.
 MigrationStats migrate_tiles(Cloth& c, const Tiling& tiling, const std::vector<int>& old_owner,
                              const std::vector<int>& new_owner, MPI_Comm comm);

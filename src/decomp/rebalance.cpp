@@ -6,13 +6,8 @@
 
 namespace drape {
 
-namespace {
-
-// Moves tiles one at a time from the most loaded rank to a neighbouring
-// rank (8-neighbour tiles) while that lowers the largest load, until the
-// imbalance is within `target`. The same on every rank (deterministic ties).
-std::vector<int> diffuse(const Tiling& tl, std::vector<int> owner, const std::vector<int64_t>& work,
-                         int ranks, double target) {
+std::vector<int> diffuse_tiles(const Tiling& tl, std::vector<int> owner, const std::vector<int64_t>& work,
+                               int ranks, double target) {
   std::vector<int64_t> load(ranks, 0);
   int64_t total = 0;
   for (int t = 0; t < tl.count(); ++t) {
@@ -51,8 +46,6 @@ std::vector<int> diffuse(const Tiling& tl, std::vector<int> owner, const std::ve
   return owner;
 }
 
-}  // namespace
-
 bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, MPI_Comm comm,
                Rebalance& out) {
   int rank = 0, ranks = 1;
@@ -66,7 +59,7 @@ bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, M
   if (ranks == 1 || now.imbalance <= threshold) return false;
   // A few boundary tiles moved usually suffice; METIS's fresh parts, even
   // renamed to overlap the old ones, can move half the cloth.
-  std::vector<int> owner = diffuse(tl, now.owner, work, ranks, threshold);
+  std::vector<int> owner = diffuse_tiles(tl, now.owner, work, ranks, threshold);
   double best = partition_with(tl, owner, work, ranks).imbalance;
   out.method = "diffusion";
   if (best > threshold) {  // METIS only if it beats what diffusion reached

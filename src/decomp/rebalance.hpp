@@ -24,6 +24,13 @@ struct Rebalance {
   const char* method = "";  // "diffusion" or "metis"
 };
 
+// Moves tiles one at a time from the most loaded rank to a neighbouring
+// rank (8-neighbour tiles) while that lowers the largest load, until the
+// imbalance is within `target`. The same on every rank (deterministic ties);
+// no MPI, so the scale model runs it for any number of ranks.
+std::vector<int> diffuse_tiles(const Tiling& tl, std::vector<int> owner, const std::vector<int64_t>& work,
+                               int ranks, double target);
+
 // Collective. Measures the current partition against the cloth's work; above
 // `threshold`, repartitions and migrates when that lowers the imbalance.
 // Returns whether tiles moved; `out` gets the figures (imbalance_before is
