@@ -61,6 +61,27 @@ TEST(Partition, MoreRanksThanTilesIsRefusedOnEveryRank) {
   MPI_Barrier(MPI_COMM_WORLD);
 }
 
+// METIS leaves parts empty when there are few tiles per part and the work
+// is uneven (four tiles of work 100, 1, 1, 1 in three parts: two empty);
+// every rank must still get a tile, at start-up and at a rebalance.
+TEST(Partition, FewUnevenTilesLeaveNoRankEmpty) {
+  const Tiling four(8, 8, 4);
+  const Partition p = partition_tiles(four, {100, 1, 1, 1}, MPI_COMM_WORLD);
+  for (int r = 0; r < 3; ++r) EXPECT_FALSE(p.tiles_of(r).empty()) << "rank " << r;
+  // The same on more tile counts and parts, on rank 0's METIS alone.
+  for (int side = 1; side <= 6; ++side)
+    for (int parts = 2; parts <= 9; ++parts)
+      for (int stride : {2, 3, 7}) {
+        const Tiling tl(4 * side, 4 * side, 4);
+        if (parts > tl.count()) continue;
+        std::vector<int64_t> work(tl.count(), 1);
+        for (int t = 0; t < tl.count(); t += stride) work[t] = 100;
+        const Partition q = partition_graph(tl, work, parts);
+        for (int r = 0; r < parts; ++r)
+          EXPECT_GT(q.work[r], 0) << side << " x " << side << " tiles, " << parts << " parts, stride " << stride;
+      }
+}
+
 TEST(Halo, EveryGhostCarriesItsOwnerAndId) {
   const Partition part = partition_tiles(kTiling, uniform_work(), MPI_COMM_WORLD);
   const HaloExchange halo(kTiling, part.owner, MPI_COMM_WORLD);

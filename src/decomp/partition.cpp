@@ -69,6 +69,24 @@ void fill_stats(const Tiling& tl, const std::vector<int64_t>& work, int parts, P
   }
 }
 
+// METIS can leave a part without a tile when there are few tiles per part
+// and the work is uneven. Each empty part takes the lightest tile (lowest id
+// among equals) of the part holding the most tiles, until none is empty.
+void fill_empty_parts(const std::vector<int64_t>& work, int parts, std::vector<int>& owner) {
+  std::vector<int> count(parts, 0);
+  for (int o : owner) ++count[o];
+  for (int r = 0; r < parts; ++r) {
+    if (count[r] > 0) continue;
+    const int donor = int(std::max_element(count.begin(), count.end()) - count.begin());
+    int pick = -1;
+    for (int t = 0; t < int(owner.size()); ++t)
+      if (owner[t] == donor && (pick < 0 || work[t] < work[pick])) pick = t;
+    owner[pick] = r;
+    --count[donor];
+    ++count[r];
+  }
+}
+
 }  // namespace
 
 Partition partition_with(const Tiling& tl, const std::vector<int>& owner, const std::vector<int64_t>& work,
@@ -113,6 +131,7 @@ Partition partition_graph(const Tiling& tl, const std::vector<int64_t>& work, in
       throw std::runtime_error("partition: METIS_PartGraphKway failed (status " + std::to_string(rc) +
                                ") for " + std::to_string(parts) + " parts of " + std::to_string(n) + " tiles");
     for (int t = 0; t < n; ++t) p.owner[t] = int(part[t]);
+    fill_empty_parts(work, parts, p.owner);  // 4 tiles of work 100, 1, 1, 1 in 3 parts: two empty
   }
   fill_stats(tl, work, parts, p);
   return p;

@@ -29,8 +29,9 @@ std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling);
 Partition partition_with(const Tiling& tiling, const std::vector<int>& owner, const std::vector<int64_t>& work,
                          int parts);
 
-// METIS_PartGraphKway into `parts` parts (all tiles to rank 0 for one part).
-// Throws std::runtime_error when METIS fails.
+// METIS_PartGraphKway into `parts` parts (all tiles to rank 0 for one part);
+// a part METIS leaves without a tile takes the lightest tile of the part
+// with the most. Throws std::runtime_error when METIS fails.
 Partition partition_graph(const Tiling& tiling, const std::vector<int64_t>& work, int parts);
 
 // Collective: rank 0 partitions, every rank gets the same result. More ranks
