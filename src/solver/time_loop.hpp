@@ -45,6 +45,9 @@ class TimeLoop {
   NewtonSolver& newton() { return newton_; }
   int64_t free_particles() const { return free_; }
 
+  // The arrays of the evaluator, both solvers and the step's saved unknowns.
+  void memory(MemoryTable& t) const;
+
   // After AMRC changed the mesh (and the lists were rebuilt).
   void mesh_changed() { free_ = red_.sum_i64(lists_.particles.size()); }
 

@@ -1,0 +1,59 @@
+// The memory a run holds per particle of the grid: every large array is
+// listed in the owners' memory tables (the heap the world took is what they
+// list).
+#include <gtest/gtest.h>
+#include <malloc.h>
+
+#include "solver/memory_table.hpp"
+#include "world.hpp"
+
+namespace drape::test {
+namespace {
+
+// Bytes malloc has handed out and not taken back (arena and mmap'd blocks).
+size_t heap_in_use() {
+  const struct mallinfo2 m = mallinfo2();
+  return m.uordblks + m.hblkhd;
+}
+
+struct Held {
+  double listed = 0, heap = 0;  // bytes a particle: in the tables, taken from the heap
+};
+
+// A box drape on the finest n x n mesh, two steps (the solvers size their
+// vectors at their first solve).
+Held held_after_two_steps(SolverMethod method, int n) {
+  Scene s;
+  s.cloth.particles = {n, n};
+  s.cloth.tile = 25;
+  s.solver.method = method;
+  const size_t before = heap_in_use();
+  Held h;
+  {
+    World w(s, test_fabric());
+    Timers tm;
+    for (int k = 0; k < 2; ++k) w.loop->step(tm);
+    MemoryTable t;
+    add_memory(t, w.cloth);
+    add_memory(t, w.lists);
+    w.loop->memory(t);
+    const double per = 1.0 / double(w.cloth.grid.n());
+    h.listed = double(t.total()) * per;
+    h.heap = double(heap_in_use() - before) * per;
+  }
+  return h;
+}
+
+TEST(Memory, TablesListWhatTheWorldHolds) {
+  held_after_two_steps(SolverMethod::Newton, 20);  // OpenMP's and the libraries' first allocations
+  for (SolverMethod m : {SolverMethod::Newton, SolverMethod::Cg}) {
+    const Held h = held_after_two_steps(m, 300);
+    std::printf("%s: %.1f bytes a particle listed, %.1f taken from the heap\n", to_string(m), h.listed, h.heap);
+    EXPECT_LE(h.listed, h.heap) << to_string(m);
+    // A stray array of one float a particle would show.
+    EXPECT_LE(h.heap - h.listed, 2.0) << to_string(m) << ": heap that no table lists, bytes a particle";
+  }
+}
+
+}  // namespace
+}  // namespace drape::test
