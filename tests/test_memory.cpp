@@ -1,6 +1,6 @@
 // The memory a run holds per particle of the grid: every large array is
 // listed in the owners' memory tables (the heap the world took is what they
-// list).
+// list), and the tables' total stays under a bound per solver.
 #include <gtest/gtest.h>
 #include <malloc.h>
 
@@ -53,6 +53,13 @@ TEST(Memory, TablesListWhatTheWorldHolds) {
     // A stray array of one float a particle would show.
     EXPECT_LE(h.heap - h.listed, 2.0) << to_string(m) << ": heap that no table lists, bytes a particle";
   }
+}
+
+// The bounds: what the tables listed at 300 x 300 when they were set, plus
+// 4 bytes (a stray array of doubles would show). Newton's runs hold no nonlinear-CG vectors, the CG's no Newton ones.
+TEST(Memory, BytesPerParticleStayUnderTheBound) {
+  EXPECT_LE(held_after_two_steps(SolverMethod::Newton, 300).listed, 1694.0);
+  EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1966.0);
 }
 
 }  // namespace
