@@ -21,6 +21,10 @@ void Minimizer::size_vectors() {
   for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) v->assign(n, 0.0);
 }
 
+void Minimizer::release() {
+  for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) std::vector<double>().swap(*v);
+}
+
 void Minimizer::memory(MemoryTable& t) const {
   t.add("Minimizer", "g, g new, s, d, zt, diagonal (nonlinear CG)",
         (g_.capacity() + gn_.capacity() + s_.capacity() + d_.capacity() + zt_.capacity() + diag_.capacity()) * 8);

@@ -75,6 +75,8 @@ class Minimizer {
   }
   // Its arrays' capacities.
   void memory(MemoryTable& t) const;
+  // Gives its vectors back (a later minimize() sizes them again).
+  void release();
 
  private:
   // Each tile's first compact number (tile_c_), for the lists' stamp and `end`.

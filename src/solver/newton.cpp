@@ -22,6 +22,10 @@ void NewtonSolver::size_vectors() {
   for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &pg_, &kp_}) v->assign(nx, 0.0);
 }
 
+void NewtonSolver::release() {
+  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &pg_, &kp_}) std::vector<double>().swap(*v);
+}
+
 void NewtonSolver::memory(MemoryTable& t) const {
   const char* o = "NewtonSolver";
   t.add(o, "d, r, s, p, K p, diagonal (compact)",

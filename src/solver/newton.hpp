@@ -40,6 +40,8 @@ class NewtonSolver {
   const std::vector<double>& step() const { return d_; }
   // Its vectors' capacities (the multigrid's levels not counted).
   void memory(MemoryTable& t) const;
+  // Gives its vectors back (a later solve sizes them again).
+  void release();
 
  private:
   void setup_multigrid(Evaluator& ev);
