@@ -46,6 +46,15 @@ void place(const Corners& k, const double* x, double* y) {
 
 }  // namespace
 
+void Amrc::memory(MemoryTable& t) const {
+  auto cap = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  t.add("Amrc", "trees' levels", cap(tree_.levels()) + cap(old_.levels()));
+  t.add("Amrc", "criterion fields (indicator, speed, inside)", cap(indicator_) + cap(speed_) + cap(inside_));
+  t.add("Amrc", "leaves (adapt's scratch)", cells_);
+  t.add("Amrc", "the old mesh's marks",
+        cap(was_active_) + cap(was_free_) + cap(edge_on_) + cap(triple_on_) + cap(shear_on_));
+}
+
 Amrc::Amrc(const Cloth& c, int max_level)
     : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
   indicator_.assign(c.grid.n(), 0.0);

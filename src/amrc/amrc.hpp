@@ -13,6 +13,7 @@
 #include "decomp/tiles.hpp"
 #include "solver/cloth.hpp"
 #include "solver/contact.hpp"
+#include "solver/memory_table.hpp"
 #include "solver/reducer.hpp"
 
 namespace drape {
@@ -68,6 +69,9 @@ class Amrc {
 
   // Puts inactive particles on the bilinear surface of their leaf.
   void fill_inactive(Cloth& c) const;
+
+  // Its arrays' capacities (both trees, the criterion's fields, the old mesh's marks).
+  void memory(MemoryTable& t) const;
 
  private:
   // After tree_ changed from old_: the new mesh, with the state carried over.

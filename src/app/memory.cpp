@@ -67,15 +67,17 @@ std::string gb(int64_t bytes) {
 
 }  // namespace
 
-int64_t estimated_bytes_per_rank(int64_t n) {
+int64_t estimated_bytes_per_rank(int64_t n, bool nonlinear_cg) {
   // Every rank holds arrays over the whole grid (Cloth, the evaluator's
   // buffers, the solver's vectors). Measured peak RSS (report.json's
-  // peak_rss_bytes) of the default scene, 10 steps, one rank and two:
-  // 200x200 124.5 MB, 400x400 410.5 MB, i.e. 2384 bytes a particle over
-  // 29 MB (newton + multigrid: 2373 over 35 MB; cg, AMRC and grid
-  // sequencing within 1 MB of these). Rounded up, for a margin.
-  constexpr int64_t kPerParticle = 2400, kFixed = int64_t(40) << 20;
-  return kFixed + kPerParticle * n;
+  // peak_rss_bytes) of the default scene on its finest mesh, 10 steps, one
+  // rank, 200x200 and 400x400: Newton 157.7 and 371.9 MB, i.e. 1785 bytes a
+  // particle over 86 MB (multigrid, AMRC and grid sequencing within 62
+  // bytes a particle of it); the nonlinear CG (or the numeric gradient,
+  // which runs it) 168.4 and 415.6 MB, 2060 bytes over 86 MB: its vectors
+  // are larger than Newton's. Rounded up, for a margin.
+  const int64_t per_particle = nonlinear_cg ? 2100 : 1900, fixed = int64_t(96) << 20;
+  return fixed + per_particle * n;
 }
 
 int64_t available_bytes() {
@@ -94,7 +96,8 @@ int64_t available_bytes() {
 
 void check_memory(const Scene& scene, MPI_Comm comm) {
   const auto& p = scene.cloth.particles;
-  const int64_t need = estimated_bytes_per_rank(int64_t(p[0]) * p[1]);
+  const bool cg = scene.solver.method == SolverMethod::Cg || scene.solver.gradient == GradientMode::Numeric;
+  const int64_t need = estimated_bytes_per_rank(int64_t(p[0]) * p[1], cg);
   // The tightest rank decides for all (MiB fit an int up to 2 PiB).
   const int64_t mine = std::min<int64_t>(available_bytes() >> 20, std::numeric_limits<int>::max());
   const int64_t have = int64_t(-max_over_ranks(comm, -int(mine))) << 20;

@@ -430,6 +430,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     const double depth = max_penetration(cloth, model, lists, red);
     sum.zigzag = count_zigzags(cloth, lists.particles.items, red);
     sum.multigrid = loop.newton().multigrid_stats();
+    loop.release_solvers();  // stepping is over: the picture reuses their memory
     settle_for_output();
     sum.penetration_written = max_penetration_written(cloth, model, tiling, owned, red);
     const Checksum ck = state_checksum(cloth, tiling, owned, red);

@@ -9,10 +9,25 @@ namespace drape {
 Minimizer::Minimizer(const Cloth& cloth, const ActiveLists& lists, const Tiling& tiling,
                      const Reducer& red)
     : c_(cloth), lists_(lists), tiling_(tiling), red_(red) {
-  const size_t n = cloth.layout.size();
-  for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) v->assign(n, 0.0);
   partials_.assign(2 * size_t(tiling.count()), 0.0);  // up to 2 sums at once
   tile_c_.assign(size_t(tiling.count()) + 1, 0);
+}
+
+// Sized at the first minimize(), not with the time loop: Newton's runs use
+// this class for its tile-ordered sums only, and would hold them for nothing.
+void Minimizer::size_vectors() {
+  const size_t n = c_.layout.size();
+  if (zt_.size() == n) return;
+  for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) v->assign(n, 0.0);
+}
+
+void Minimizer::release() {
+  for (auto* v : {&g_, &gn_, &s_, &d_, &zt_, &diag_}) std::vector<double>().swap(*v);
+}
+
+void Minimizer::memory(MemoryTable& t) const {
+  t.add("Minimizer", "g, g new, s, d, zt, diagonal (nonlinear CG)",
+        (g_.capacity() + gn_.capacity() + s_.capacity() + d_.capacity() + zt_.capacity() + diag_.capacity()) * 8);
 }
 
 void Minimizer::number_unknowns(int64_t end) {
@@ -48,6 +63,7 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
                              const std::function<void(int, double)>& on_iteration) {
   const int64_t n = c_.layout.size();
   const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
+  size_vectors();
   double* g = g_.data();
   double* gn = gn_.data();
   double* s = s_.data();

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "solver/cost.hpp"
+#include "solver/memory_table.hpp"
 #include "solver/timers.hpp"
 
 namespace drape {
@@ -72,6 +73,10 @@ class Minimizer {
     number_unknowns(end);
     return tile_c_[lists_.tiles.size()];
   }
+  // Its arrays' capacities.
+  void memory(MemoryTable& t) const;
+  // Gives its vectors back (a later minimize() sizes them again).
+  void release();
 
  private:
   // Each tile's first compact number (tile_c_), for the lists' stamp and `end`.
@@ -80,6 +85,7 @@ class Minimizer {
   void tile_runs(int64_t end, F&& per_tile);
 
   CostTerms eval(Evaluator& ev, double* z, double* g, bool numeric);
+  void size_vectors();
 
   const Cloth& c_;
   const ActiveLists& lists_;

@@ -70,13 +70,14 @@ struct Cloth {
   std::vector<uint8_t> flags;    // ParticleFlag per particle
   std::vector<uint8_t> level;    // AMRC level of the particle's finest leaf (0: finest)
   // Neighbour tables over the active mesh: next/prev active particle along d, -1 at a border.
-  std::vector<int64_t> next[2], prev[2];
+  // 32-bit like GatherRow's offsets (kMaxParticles is far below INT32_MAX).
+  std::vector<int32_t> next[2], prev[2];
   // Element slot switches (1 = active element).
   std::vector<uint8_t> edge_on, triple_on, shear_on;
   // Shear cells: cell[k][s] is corner k+1 of slot s's cell (k = 0: along i
   // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k][p]
   // is the slot whose corner k+1 p is (at most one: the leaves tile the cloth).
-  std::vector<int64_t> cell[3], corner_of[3];
+  std::vector<int32_t> cell[3], corner_of[3];
   // Per triple: the bending reference axis (unit, 3 per slot), frozen for a step.
   std::vector<double> bend_axis;
   // Rest geometry per slot, from the active mesh: rest length and the width

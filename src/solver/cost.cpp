@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <stdexcept>
 
 #include "solver/kernels.hpp"
@@ -33,12 +34,6 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   cost_e_.assign(2 * n, 0.0);
   cost_t_.assign(2 * n, 0.0);
   cost_s_.assign(n, 0.0);
-  gq_e_.assign(2 * n, 0.0);
-  gq_t_.assign(2 * n, 0.0);
-  gq_s_.assign(n, 0.0);
-  gf_e_.assign(2 * n, 0.0);
-  gf_t_.assign(2 * n, 0.0);
-  gf_s_.assign(n, 0.0);
   rho_.assign(3 * n, 0.0);
   k_slope_.assign(5 * n, 0.0);
   k_tension_.assign(2 * n, 0.0);
@@ -50,8 +45,6 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
   nb_e_.assign(2 * n, -1);
   nb_t_.assign(4 * n, -1);
   nb_s_.assign(3 * n, -1);
-  hres_.assign(3 * n, 0.0);
-  hpend_.assign(3 * n, 0.0);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
 }
 
@@ -64,6 +57,31 @@ void Evaluator::keep_products(bool on) {
   kc_.assign(n * kKc, 0.0);
   keep_ = on;
   kg_ready_ = settled_ = false;
+}
+
+void Evaluator::memory(MemoryTable& t) const {
+  const char* o = "Evaluator";
+  auto sum = [](std::initializer_list<const std::vector<double>*> vs) {
+    size_t b = 0;
+    for (const auto* v : vs) b += v->capacity() * sizeof(double);
+    return b;
+  };
+  t.add(o, "element buffers (edges, triples, cells)", sum({&buf_e_, &buf_t_, &buf_s_}));
+  t.add(o, "products' kept numbers (elements, contact)", sum({&kg_e_, &kg_t_, &kg_s_, &kc_}));
+  t.add(o, "band costs, slopes, force derivatives",
+        sum({&cost_p_, &cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
+  t.add(o, "residual", rho_);
+  t.add(o, "K's frozen slopes and tensions", sum({&k_slope_, &k_tension_}));
+  t.add(o, "gather rows", rows_);
+  t.add(o, "slot positions, neighbours in list order",
+        (at_e_.capacity() + at_t_.capacity() + at_s_.capacity() + nb_e_.capacity() + nb_t_.capacity() +
+         nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
+  t.add(o, "assembly maps",
+        (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
+            (hx_start_.capacity() + ht_start_.capacity()) * sizeof(int64_t) +
+            (hx_.capacity() + ht_.capacity()) * sizeof(HxEntry));
+  t.add(o, "numeric gradient's copy of z", zwork_);
 }
 
 // ---- the element buffers in list order -----------------------------------
@@ -86,6 +104,12 @@ void Evaluator::list_rows() {
   if (rows_stamp_ == lists_.stamp && lists_.stamp != 0 && rows_hanging_ == lists_.hanging.size()) return;
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
+  // The hanging particles' forces and results on the way to their ends, by
+  // grid index: sized once the lists have room for hanging particles (AMRC's
+  // first ones, or room reserved for them up front), so a uniform mesh never
+  // holds them. All zero between passes, as when sized.
+  if (lists_.hanging.capacity() > 0 && hres_.empty())
+    for (auto* v : {&hres_, &hpend_}) v->assign(3 * size_t(c_.grid.n()), 0.0);
   kg_ready_ = settled_ = false;  // kept in the old lists' order
   // Each element's position (the ring's after the owned) and neighbours.
   auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at, auto&& ends) {
@@ -135,8 +159,10 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_e_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_e_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / L0;
-  gf_e_[pos] = (sigma + m_.memory * mem) * lam;
+  if (!gq_e_.empty()) {  // a gradient's slopes (evaluate with one)
+    gq_e_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / L0;
+    gf_e_[pos] = (sigma + m_.memory * mem) * lam;
+  }
 }
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
@@ -156,8 +182,10 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* s
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_t_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_t_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / Lm;
-  gf_t_[pos] = (sigma + m_.memory * mem) * lam;
+  if (!gq_t_.empty()) {  // a gradient's slopes (evaluate with one)
+    gq_t_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam / Lm;
+    gf_t_[pos] = (sigma + m_.memory * mem) * lam;
+  }
 }
 
 void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* settle) {
@@ -176,8 +204,10 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const double lam = A / (c_.shear_rest[s] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
-  gq_s_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam;
-  gf_s_[pos] = (sigma + m_.memory * mem) * lam;
+  if (!gq_s_.empty()) {  // a gradient's slopes (evaluate with one)
+    gq_s_[pos] = (sigma * ex.dr_dq - m_.memory * mem * st.df_dq) * lam;
+    gf_s_[pos] = (sigma + m_.memory * mem) * lam;
+  }
 }
 
 // ---- pass 2: Newton residual per free particle ---------------------------
@@ -333,11 +363,23 @@ CostTerms Evaluator::settled_cost(double* z) {
   return cost;
 }
 
+// The elements' band slopes along dk/dx and derivatives by their forces
+// (gq_*, gf_*) only serve a gradient: sized at the first evaluation that asks
+// for one, so Newton's runs (settled_cost, products) never hold them. Once
+// sized, every cost pass writes them, as it always did.
+void Evaluator::size_slopes() {
+  if (!gq_e_.empty()) return;
+  const int64_t n = c_.grid.n();
+  for (auto* v : {&gq_e_, &gq_t_, &gf_e_, &gf_t_}) v->assign(2 * n, 0.0);
+  for (auto* v : {&gq_s_, &gf_s_}) v->assign(n, 0.0);
+}
+
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   list_rows();
   settled_ = false;
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
+  if (grad) size_slopes();
   const CostTerms cost = cost_pass(z, nullptr);
   if (!grad) return cost;
   halo_.exchange_particles(rho_.data(), 3);

@@ -20,6 +20,7 @@
 #include "solver/cloth.hpp"
 #include "solver/halo.hpp"
 #include "solver/loops.hpp"
+#include "solver/memory_table.hpp"
 #include "solver/model.hpp"
 #include "solver/reducer.hpp"
 
@@ -110,6 +111,8 @@ class Evaluator {
   const std::vector<double>& residual() const { return rho_; }
 
   const ActiveLists& lists() const { return lists_; }
+  // Its arrays' capacities.
+  void memory(MemoryTable& t) const;
   // Puts AMRC's hanging particles (3 values per particle in x) on their
   // coarse sides; the entry points above do it to z themselves.
   void interpolate_hanging(double* x) const;
@@ -124,6 +127,7 @@ class Evaluator {
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   CostTerms cost_pass(double* z, double* settle);
+  void size_slopes();
   // An element's stiffness numbers at z (edge_kept's, kept_gradients'),
   // its band stop computed here; its frozen tension and slope recorded.
   void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);

@@ -9,10 +9,30 @@
 namespace drape {
 
 NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots, Preconditioner pc)
-    : c_(cloth), dots_(dots), pc_(pc) {
-  const size_t n = cloth.layout.size(), nx = size_t(cloth.layout.tension());
-  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &zt_}) v->assign(nx, 0.0);
-  for (auto* v : {&pg_, &kp_, &diag_}) v->assign(n, 0.0);
+    : c_(cloth), dots_(dots), pc_(pc) {}
+
+// Sized at the first solve, not with the time loop: a run with the nonlinear
+// CG (or the numeric gradient) never solves, and would hold them for nothing.
+// Every vector holds positions only (3 a particle of the grid): the product's
+// operand and K p too (the evaluator writes them at the positions of z's
+// layout, which come first).
+void NewtonSolver::size_vectors() {
+  const size_t nx = size_t(c_.layout.tension());
+  if (r_.size() == nx) return;
+  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &pg_, &kp_}) v->assign(nx, 0.0);
+}
+
+void NewtonSolver::release() {
+  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &pg_, &kp_}) std::vector<double>().swap(*v);
+}
+
+void NewtonSolver::memory(MemoryTable& t) const {
+  const char* o = "NewtonSolver";
+  t.add(o, "d, r, s, p, K p, diagonal (compact)",
+        (d_.capacity() + r_.capacity() + s_.capacity() + p_.capacity() + kpc_.capacity() + dc_.capacity()) *
+            sizeof(double));
+  t.add(o, "p, K p (at z's positions)", (pg_.capacity() + kp_.capacity()) * sizeof(double));
+  t.add(o, "ids", ids_);
 }
 
 namespace {
@@ -53,15 +73,19 @@ bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
 // particles' positions numbered in tile order (Minimizer::tile_sums' c), so
 // that a coarse mesh's few unknowns lie together in memory instead of one
 // triple per cache line. Only the product's operand, its result and the
-// diagonal live at z's indices (pg_, kp_, diag_): the evaluator's kernels
+// diagonal live at z's indices (pg_, kp_): the evaluator's kernels
 // read and write particles there. The preconditioner: the diagonal (each
 // particle's three entries scaled by its block's trace / 3), or one
 // multigrid V-cycle on K assembled.
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
+  size_vectors();
   double *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(), *kpc = kpc_.data(),
-         *dc = dc_.data(), *pg = pg_.data(), *kp = kp_.data(), *diag = diag_.data();
+         *dc = dc_.data(), *pg = pg_.data(), *kp = kp_.data();
+  // The diagonal at z's indices lands in K p's vector: it is read once, into
+  // dc, before the first product overwrites it.
+  double* diag = kp;
   const double* rho = ev.residual().data();
   const int64_t end = c_.layout.tension();
   const bool mg = pc_ == Preconditioner::Multigrid;
@@ -180,9 +204,12 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   }
   res.evaluations = 1;
   double c0 = res.cost.total();
-  double* zt = zt_.data();  // the free particles' positions before the line search's trials
+  size_vectors();
+  // The free particles' positions before the line search's trials, in the
+  // linear solve's residual: it is dead from the solve's end to the next.
+  double* zt = r_.data();
   const int64_t end = c_.layout.tension();  // the positions: Newton's unknowns
-  if (dots_.unknowns_below(end) > int64_t(zt_.size()))  // 3 per owned particle at most
+  if (dots_.unknowns_below(end) > int64_t(r_.size()))  // 3 per owned particle at most
     throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
   mg_solves_ = 0;  // a new step (or a retry): the V-cycle is built afresh,
   mg_.forget();    // from this step's K alone (restarts stay bitwise)

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "solver/cg.hpp"
+#include "solver/memory_table.hpp"
 #include "solver/multigrid/multigrid.hpp"
 #include "solver/scene.hpp"
 
@@ -37,6 +38,10 @@ class NewtonSolver {
   // iterations; the count. d in step() afterwards (compact order).
   int linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol, Timers& tm);
   const std::vector<double>& step() const { return d_; }
+  // Its vectors' capacities (the multigrid's levels not counted).
+  void memory(MemoryTable& t) const;
+  // Gives its vectors back (a later solve sizes them again).
+  void release();
 
  private:
   void setup_multigrid(Evaluator& ev);
@@ -45,10 +50,13 @@ class NewtonSolver {
   const Cloth& c_;
   Minimizer& dots_;
   // Compact (Minimizer::for_each_unknown's c): the step, residual, scaled
-  // residual, direction, K p, diagonal and the positions before the trials.
-  std::vector<double> d_, r_, s_, p_, kpc_, dc_, zt_;
-  // At z's indices: the direction for the product, K p, the diagonal.
-  std::vector<double> pg_, kp_, diag_;
+  // residual, direction, K p and diagonal; r_ holds the positions before
+  // the line search's trials between solves.
+  std::vector<double> d_, r_, s_, p_, kpc_, dc_;
+  // At z's position indices: the direction for the product, K p (and the
+  // diagonal before the first product).
+  std::vector<double> pg_, kp_;
+  void size_vectors();
   Preconditioner pc_;
   BlockMatrix k_;   // K assembled (multigrid's finest level)
   Multigrid mg_;

@@ -20,6 +20,13 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
   free_ = red.sum_i64(lists.particles.size());
 }
 
+void TimeLoop::memory(MemoryTable& t) const {
+  ev_.memory(t);
+  cg_.memory(t);
+  newton_.memory(t);
+  t.add("TimeLoop", "saved unknowns (a step's retry)", z_saved_);
+}
+
 void TimeLoop::freeze_bend_axes() {
   const double* x1 = c_.x1.data();
   auto tangent = [&](int64_t p, int d) {

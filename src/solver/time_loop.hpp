@@ -45,6 +45,16 @@ class TimeLoop {
   NewtonSolver& newton() { return newton_; }
   int64_t free_particles() const { return free_; }
 
+  // The arrays of the evaluator, both solvers and the step's saved unknowns.
+  void memory(MemoryTable& t) const;
+  // After the last step: the solvers give their vectors back, so that the
+  // output's buffers (the picture's) take memory the run no longer uses
+  // instead of adding to its peak. A later step sizes them again.
+  void release_solvers() {
+    cg_.release();
+    newton_.release();
+  }
+
   // After AMRC changed the mesh (and the lists were rebuilt).
   void mesh_changed() { free_ = red_.sum_i64(lists_.particles.size()); }
 

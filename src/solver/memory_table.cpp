@@ -1,0 +1,47 @@
+#include "solver/memory_table.hpp"
+
+#include "amrc/active_lists.hpp"
+#include "solver/cloth.hpp"
+
+namespace drape {
+
+namespace {
+
+template <class T>
+size_t cap(const std::vector<T>& v) {
+  return v.capacity() * sizeof(T);
+}
+
+size_t list_bytes(const ActiveList& l) { return cap(l.items) + cap(l.tile_begin); }
+
+size_t runs_bytes(const IndexRuns& r) { return cap(r.bounds) + cap(r.tile_begin); }
+
+}  // namespace
+
+void add_memory(MemoryTable& t, const Cloth& c) {
+  const char* o = "Cloth";
+  t.add(o, "z (positions, forces)", c.z);
+  t.add(o, "x1, x2 (earlier positions)", cap(c.x1) + cap(c.x2));
+  t.add(o, "anchor (step-start forces)", c.anchor);
+  t.add(o, "mass, flags, level", cap(c.mass) + cap(c.flags) + cap(c.level));
+  t.add(o, "next, prev (neighbour tables)", cap(c.next[0]) + cap(c.next[1]) + cap(c.prev[0]) + cap(c.prev[1]));
+  t.add(o, "element switches", cap(c.edge_on) + cap(c.triple_on) + cap(c.shear_on));
+  size_t cells = 0;
+  for (int k = 0; k < 3; ++k) cells += cap(c.cell[k]) + cap(c.corner_of[k]);
+  t.add(o, "cell, corner_of (shear cells' corners)", cells);
+  t.add(o, "bend_axis", c.bend_axis);
+  t.add(o, "rest geometry (lengths, widths, areas)",
+        cap(c.edge_rest) + cap(c.edge_width) + cap(c.triple_rest) + cap(c.triple_width) + cap(c.shear_area) +
+            cap(c.shear_rest));
+}
+
+void add_memory(MemoryTable& t, const ActiveLists& l) {
+  const char* o = "ActiveLists";
+  t.add(o, "particles, edges, triples, cells (and the ring's)",
+        list_bytes(l.particles) + list_bytes(l.edges) + list_bytes(l.triples) + list_bytes(l.shears) +
+            list_bytes(l.ring_edges) + list_bytes(l.ring_triples) + list_bytes(l.ring_shears));
+  t.add(o, "unknowns' runs", runs_bytes(l.unknowns) + runs_bytes(l.unknown_spans));
+  t.add(o, "hanging links", l.hanging);
+}
+
+}  // namespace drape

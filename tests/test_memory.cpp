@@ -1,0 +1,99 @@
+// The memory a run holds per particle of the grid: every large array is
+// listed in the owners' memory tables (the heap the world took is what they
+// list), and the tables' total stays under a bound per solver.
+#include <gtest/gtest.h>
+#include <malloc.h>
+
+#include <cstring>
+
+#include "solver/memory_table.hpp"
+#include "world.hpp"
+
+namespace drape::test {
+namespace {
+
+// Bytes malloc has handed out and not taken back (arena and mmap'd blocks).
+size_t heap_in_use() {
+  const struct mallinfo2 m = mallinfo2();
+  return m.uordblks + m.hblkhd;
+}
+
+struct Held {
+  double listed = 0, heap = 0;  // bytes a particle: in the tables, taken from the heap
+};
+
+// A box drape on the finest n x n mesh, two steps (the solvers size their
+// vectors at their first solve).
+Held held_after_two_steps(SolverMethod method, int n) {
+  Scene s;
+  s.cloth.particles = {n, n};
+  s.cloth.tile = 25;
+  s.solver.method = method;
+  const size_t before = heap_in_use();
+  Held h;
+  {
+    World w(s, test_fabric());
+    Timers tm;
+    for (int k = 0; k < 2; ++k) w.loop->step(tm);
+    MemoryTable t;
+    add_memory(t, w.cloth);
+    add_memory(t, w.lists);
+    w.loop->memory(t);
+    const double per = 1.0 / double(w.cloth.grid.n());
+    h.listed = double(t.total()) * per;
+    h.heap = double(heap_in_use() - before) * per;
+  }
+  return h;
+}
+
+TEST(Memory, TablesListWhatTheWorldHolds) {
+  held_after_two_steps(SolverMethod::Newton, 20);  // OpenMP's and the libraries' first allocations
+  for (SolverMethod m : {SolverMethod::Newton, SolverMethod::Cg}) {
+    const Held h = held_after_two_steps(m, 300);
+    std::printf("%s: %.1f bytes a particle listed, %.1f taken from the heap\n", to_string(m), h.listed, h.heap);
+    EXPECT_LE(h.listed, h.heap) << to_string(m);
+    // A stray array of one float a particle would show.
+    EXPECT_LE(h.heap - h.listed, 2.0) << to_string(m) << ": heap that no table lists, bytes a particle";
+  }
+}
+
+// The bounds: what the tables listed at 300 x 300 when they were set, plus
+// 4 bytes (a stray array of doubles would show). Newton's runs hold no nonlinear-CG vectors, the CG's no Newton ones.
+TEST(Memory, BytesPerParticleStayUnderTheBound) {
+  EXPECT_LE(held_after_two_steps(SolverMethod::Newton, 300).listed, 1694.0);
+  EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1966.0);
+}
+
+// After the last step the solvers give their vectors back (the picture
+// then reuses their memory); a step after that sizes them again and lands
+// where a run that kept them does, bit for bit.
+TEST(Memory, SolversGiveTheirVectorsBack) {
+  Scene s;
+  s.cloth.particles = {33, 33};
+  s.cloth.tile = 8;
+  s.cloth.height = 0.401;  // contact within a few steps: Newton solves
+  World kept(s, test_fabric()), freed(s, test_fabric());
+  Timers tm;
+  auto listed = [](World& w) {
+    MemoryTable t;
+    w.loop->memory(t);
+    return t.total();
+  };
+  for (int k = 0; k < 2; ++k) kept.loop->step(tm), freed.loop->step(tm);
+  const size_t before = listed(freed);
+  freed.loop->release_solvers();
+  const size_t newton = 8 * size_t(freed.cloth.layout.tension()) * sizeof(double);  // its eight vectors
+  EXPECT_EQ(before - listed(freed), newton);
+  int solved = 0;
+  for (int k = 0; k < 12; ++k) {
+    kept.loop->step(tm);
+    solved += freed.loop->step(tm).iterations;
+  }
+  EXPECT_GT(solved, 0) << "the steps after the release should have solved";
+  EXPECT_EQ(listed(freed), before);
+  ASSERT_EQ(kept.cloth.z.size(), freed.cloth.z.size());
+  EXPECT_EQ(0, std::memcmp(kept.cloth.z.data(), freed.cloth.z.data(), kept.cloth.z.size() * sizeof(double)));
+}
+
+}  // namespace
+}  // namespace drape::test
