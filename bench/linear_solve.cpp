@@ -23,6 +23,8 @@
 namespace drape {
 namespace {
 
+const char* name(Interpolation ip) { return ip == Interpolation::Smoothed ? "smoothed" : "bilinear"; }
+
 struct Variant {
   std::string name;
   Preconditioner pc;
@@ -55,29 +57,50 @@ void kernel_times(World& w) {
   const double matvec = per_call([&] { K.multiply(r.data(), x.data()); });
   std::printf("stiffness product %.3f ms; K assembled %.2f products, K x %.2f products (%lld blocks)\n",
               1e3 * product, assemble / product, matvec / product, (long long)K.blocks());
-  for (int degree : {1, 2, 3}) {
-    Multigrid mg(MultigridSettings{degree, 10.0, 100});
-    mg.setup(K, ids, n, n, 1);
-    const double setup = per_call([&] { mg.setup(K, ids, n, n, 1); });
-    const double cycle = per_call([&] { mg.apply(r.data(), x.data()); });
-    std::printf("degree %d: %d levels; set-up (values) %.2f products, V-cycle %.2f products\n", degree, mg.levels(),
-                setup / product, cycle / product);
-    if (degree == 1)
-      for (const MultigridLevelStats& l : mg.stats())
-        std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s\n",
-                    (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds);
-  }
+  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed})
+    for (int degree : {1, 2, 3}) {
+      MultigridSettings ms{degree, 10.0, 100};
+      ms.interpolation = ip;
+      Multigrid mg(ms);
+      mg.setup(K, ids, n, n, 1);
+      const double setup = per_call([&] { mg.setup(K, ids, n, n, 1); });
+      const double cycle = per_call([&] { mg.apply(r.data(), x.data()); });
+      std::printf("%s, degree %d: %d levels; set-up (values) %.2f products, V-cycle %.2f products\n", name(ip), degree,
+                  mg.levels(), setup / product, cycle / product);
+      if (degree == 1)
+        for (const MultigridLevelStats& l : mg.stats())
+          std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s\n",
+                      (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds);
+    }
   // One linear solve to 1e-8 from this state, each preconditioner: how the
-  // counts grow with the grid (the loose Newton solves hide it).
-  for (Preconditioner pc : {Preconditioner::Jacobi, Preconditioner::Multigrid}) {
+  // counts grow with the grid (the loose Newton solves hide it). Seconds:
+  // set-up (K assembled, levels built) and solve, CPU time of this thread.
+  struct OneSolve {
+    const char* name;
+    Preconditioner pc;
+    Interpolation ip;
+    int smoothed_levels;
+  };
+  const OneSolve solves[] = {{"jacobi", Preconditioner::Jacobi, Interpolation::Bilinear, 0},
+                             {"multigrid bilinear", Preconditioner::Multigrid, Interpolation::Bilinear, 0},
+                             {"multigrid smoothed (finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 1},
+                             {"multigrid smoothed (2 finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 2},
+                             {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000}};
+  for (const OneSolve& o : solves) {
     SolverSpec spec = w.scene.solver;
-    spec.preconditioner = pc;
+    spec.preconditioner = o.pc;
     TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red, spec);
+    MultigridSettings ms;
+    ms.interpolation = o.ip;
+    ms.smoothed_levels = o.smoothed_levels;
+    loop.newton().set_multigrid(ms);
     Timers t;
     loop.evaluator().settled_cost(z);
-    const double t0 = omp_get_wtime();
+    const std::clock_t c0 = std::clock();
     const int its = loop.newton().linear_solve(loop.evaluator(), z, 5000, 1e-8, t);
-    std::printf("one solve to 1e-8, %s: %d iterations, %.3f s\n", to_string(pc), its, omp_get_wtime() - t0);
+    const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+    std::printf("one solve to 1e-8, %-30s %4d iterations, cpu %.3f s (wall: set-up+diagonal %.3f, precondition %.3f)\n",
+                (std::string(o.name) + ":").c_str(), its, cpu, t.seconds[kScaling], t.seconds[kPrecondition]);
   }
   std::fflush(stdout);
 }

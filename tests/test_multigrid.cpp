@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -104,50 +105,151 @@ TEST(Multigrid, ProlongationInterpolatesAndSkipsNonUnknowns) {
   EXPECT_NEAR(a, b, 1e-12 * std::fabs(a));
 }
 
-// One two-level cycle (exact coarse solve) on a smooth error: its energy
-// drops by a factor that does not grow as the grid is refined.
-TEST(Multigrid, TwoLevelReductionOfASmoothErrorIndependentOfSpacing) {
-  std::vector<double> factors;
-  for (int n : {17, 33, 65}) {
-    Stretched s(n);
-    const int64_t level1 = int64_t(coarse_points(s.ids(), n, n, 1).size());
-    MultigridSettings st;
-    st.coarsest = level1;
-    Multigrid mg(st);
-    mg.setup(s.K, s.ids(), n, n, 1);
-    ASSERT_EQ(mg.levels(), 2);
-    std::vector<double> e(3 * s.ids().size()), ae(e.size()), c(e.size());
-    for (size_t r = 0; r < s.ids().size(); ++r) {
-      const double x = double(s.ids()[r] / n) / (n - 1), y = double(s.ids()[r] % n) / (n - 1);
-      e[3 * r] = std::sin(M_PI * x) * std::sin(2 * M_PI * y);
-      e[3 * r + 2] = std::sin(3 * M_PI * x) * std::sin(M_PI * y);
+// The graph Laplacian of an n x n grid (4-neighbours), blocks of L_fg I:
+// every row sums to zero, and interior rows also vanish on linear fields.
+BlockMatrix grid_laplacian(const std::vector<int64_t>& ids, int n) {
+  std::vector<int32_t> row(size_t(n) * n, -1);
+  for (size_t r = 0; r < ids.size(); ++r) row[ids[r]] = int32_t(r);
+  std::vector<std::vector<int32_t>> cols(ids.size());
+  for (size_t r = 0; r < ids.size(); ++r) {
+    const int i = int(ids[r] / n), j = int(ids[r] % n);
+    cols[r].push_back(int32_t(r));
+    const int di[] = {-1, 1, 0, 0}, dj[] = {0, 0, -1, 1};
+    for (int k = 0; k < 4; ++k) {
+      const int a = i + di[k], b = j + dj[k];
+      if (a >= 0 && a < n && b >= 0 && b < n && row[int64_t(a) * n + b] >= 0) cols[r].push_back(row[int64_t(a) * n + b]);
     }
-    const double before = energy(s.K, e);
-    s.K.multiply(e.data(), ae.data());
-    mg.apply(ae.data(), c.data());
-    for (size_t k = 0; k < e.size(); ++k) e[k] -= c[k];
-    factors.push_back(std::sqrt(energy(s.K, e) / before));
+    std::sort(cols[r].begin(), cols[r].end());
   }
-  std::printf("two-level energy reduction at 17, 33, 65: %.3f %.3f %.3f\n", factors[0], factors[1], factors[2]);
-  for (double f : factors) EXPECT_LT(f, 0.5);
-  EXPECT_LT(factors[2], 1.5 * factors[0]) << factors[0] << " " << factors[1] << " " << factors[2];
+  BlockMatrix L;
+  L.set_pattern(cols);
+  for (int64_t r = 0; r < L.rows; ++r)
+    for (int64_t k = L.start[r]; k < L.start[r + 1]; ++k) {
+      const double v = L.col[k] == r ? double(L.start[r + 1] - L.start[r] - 1) : -1.0;
+      for (int d = 0; d < 3; ++d) L.val[9 * k + 4 * d] = v;
+    }
+  return L;
+}
+
+// The smoothed P = (I - w D^-1 A) P0 keeps what A kills: on a Laplacian
+// (rows summing to zero) it interpolates constants exactly wherever P0 did
+// around a point, and linear fields (rigid translations and, to first order,
+// rotations) in the interior; yet it is not P0: wider, and different on a
+// rough coarse vector.
+TEST(Multigrid, SmoothedProlongationKeepsConstantsAndLinearFields) {
+  const int n = 17;
+  std::vector<int64_t> fine;
+  for (int64_t p = 1; p < int64_t(n) * n; ++p) fine.push_back(p);  // the corner (0, 0) is no unknown
+  const BlockMatrix L = grid_laplacian(fine, n);
+  std::vector<int64_t> coarse = coarse_points(fine, n, n, 1);
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const Prolongation P0 = make_prolongation(fine, coarse, n, n, 1, scratch);
+  Chebyshev smoother;
+  smoother.setup(L, 1, 10);
+  EXPECT_GT(smoother.estimate(), 1.0);
+  BlockMatrix ap0;
+  Prolongation P;
+  smooth_prolongation(L, smoother.dinv(), smoother.estimate(), P0, ap0, P, true);
+  EXPECT_GT(P.P.blocks(), P0.P.blocks());
+  auto field = [&](const std::vector<int64_t>& pts, int d) {
+    std::vector<double> v(3 * pts.size());
+    for (size_t r = 0; r < pts.size(); ++r) {
+      const double i = double(pts[r] / n), j = double(pts[r] % n);
+      v[3 * r] = 1.0;                // a translation
+      v[3 * r + 1] = i;              // linear in i
+      v[3 * r + 2] = d * j - 0.5 * i;  // another linear field
+    }
+    return v;
+  };
+  const std::vector<double> xc = field(coarse, 2), want = field(fine, 2);
+  std::vector<double> got(want.size(), 0.0);
+  prolong_add(P, xc.data(), got.data());
+  int checked_constant = 0, checked_linear = 0;
+  for (size_t f = 0; f < fine.size(); ++f) {
+    const int i = int(fine[f] / n), j = int(fine[f] % n);
+    if (i + j >= 4) {  // P0 1 = 1 on this point's neighbours (none interpolates from the corner)
+      EXPECT_NEAR(got[3 * f], 1.0, 1e-13) << i << "," << j;
+      ++checked_constant;
+    }
+    if (i >= 2 && j >= 2 && i <= n - 2 && j <= n - 2 && i + j >= 5) {  // interior: L kills linear fields
+      EXPECT_NEAR(got[3 * f + 1], want[3 * f + 1], 1e-12) << i << "," << j;
+      EXPECT_NEAR(got[3 * f + 2], want[3 * f + 2], 1e-12) << i << "," << j;
+      ++checked_linear;
+    }
+  }
+  EXPECT_GT(checked_constant, 200);
+  EXPECT_GT(checked_linear, 150);
+  // A rough coarse vector: the smoothing step changes its interpolant.
+  std::vector<double> rough(xc.size());
+  for (size_t k = 0; k < rough.size(); ++k) rough[k] = (k / 3) % 2 ? 1.0 : -1.0;
+  std::vector<double> a(want.size(), 0.0), b(want.size(), 0.0);
+  prolong_add(P0, rough.data(), a.data());
+  prolong_add(P, rough.data(), b.data());
+  double diff = 0;
+  for (size_t k = 0; k < a.size(); ++k) diff = std::max(diff, std::fabs(a[k] - b[k]));
+  EXPECT_GT(diff, 0.1);
+}
+
+// One two-level cycle (exact coarse solve) on a smooth error: its energy
+// drops by a factor that does not grow as the grid is refined, with the
+// bilinear P and with the smoothed one.
+double two_level_reduction(int n, Interpolation ip) {
+  Stretched s(n);
+  const int64_t level1 = int64_t(coarse_points(s.ids(), n, n, 1).size());
+  MultigridSettings st;
+  st.coarsest = level1;
+  st.interpolation = ip;
+  Multigrid mg(st);
+  mg.setup(s.K, s.ids(), n, n, 1);
+  EXPECT_EQ(mg.levels(), 2);
+  std::vector<double> e(3 * s.ids().size()), ae(e.size()), c(e.size());
+  for (size_t r = 0; r < s.ids().size(); ++r) {
+    const double x = double(s.ids()[r] / n) / (n - 1), y = double(s.ids()[r] % n) / (n - 1);
+    e[3 * r] = std::sin(M_PI * x) * std::sin(2 * M_PI * y);
+    e[3 * r + 2] = std::sin(3 * M_PI * x) * std::sin(M_PI * y);
+  }
+  const double before = energy(s.K, e);
+  s.K.multiply(e.data(), ae.data());
+  mg.apply(ae.data(), c.data());
+  for (size_t k = 0; k < e.size(); ++k) e[k] -= c[k];
+  return std::sqrt(energy(s.K, e) / before);
+}
+
+TEST(Multigrid, TwoLevelReductionOfASmoothErrorIndependentOfSpacing) {
+  std::vector<double> bilinear;
+  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed}) {
+    std::vector<double> factors;
+    for (int n : {17, 33, 65}) factors.push_back(two_level_reduction(n, ip));
+    std::printf("two-level energy reduction at 17, 33, 65, %s P: %.3f %.3f %.3f\n",
+                ip == Interpolation::Smoothed ? "smoothed" : "bilinear", factors[0], factors[1], factors[2]);
+    for (double f : factors) EXPECT_LT(f, 0.5);
+    EXPECT_LT(factors[2], 1.5 * factors[0]) << factors[0] << " " << factors[1] << " " << factors[2];
+    if (ip == Interpolation::Bilinear) bilinear = factors;
+    else  // the smoothed coarse space holds more of the smooth error
+      for (size_t k = 0; k < factors.size(); ++k) EXPECT_LT(factors[k], bilinear[k]) << k;
+  }
 }
 
 // Preconditioned CG to 1e-8: multigrid's count stays flat from 33 to 129
 // while the diagonal's grows with the spacing.
 TEST(Multigrid, PreconditionedIterationsStayFlatAsTheGridIsRefined) {
-  std::vector<int> mg_its, jac_its;
+  std::vector<int> mg_its, sm_its, jac_its;
   const int sizes[] = {33, 65, 129};
   for (int n : sizes) {
     Stretched s(n);
-    Multigrid mg;
-    mg.setup(s.K, s.ids(), n, n, 1);
-    EXPECT_GE(mg.levels(), 3);
     std::mt19937_64 rng(2);
     std::uniform_real_distribution<double> u(-1, 1);
     std::vector<double> b(3 * s.ids().size());
     for (double& v : b) v = u(rng);
-    mg_its.push_back(pcg(s.K, b, [&](const double* r, double* x) { mg.apply(r, x); }, 1e-8));
+    for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed}) {
+      MultigridSettings st;
+      st.interpolation = ip;
+      Multigrid mg(st);
+      mg.setup(s.K, s.ids(), n, n, 1);
+      EXPECT_GE(mg.levels(), 3);
+      const int its = pcg(s.K, b, [&](const double* r, double* x) { mg.apply(r, x); }, 1e-8);
+      (ip == Interpolation::Smoothed ? sm_its : mg_its).push_back(its);
+    }
     if (n > 65) continue;  // the diagonal's count at 129 would take seconds
     std::vector<double> dinv(b.size());
     for (int64_t r = 0; r < s.K.rows; ++r)
@@ -157,26 +259,44 @@ TEST(Multigrid, PreconditionedIterationsStayFlatAsTheGridIsRefined) {
     }, 1e-8));
   }
   for (size_t k = 0; k < mg_its.size(); ++k)
-    std::printf("PCG to 1e-8 at %d: multigrid %d iterations\n", sizes[k], mg_its[k]);
+    std::printf("PCG to 1e-8 at %d: multigrid %d iterations (smoothed P %d)\n", sizes[k], mg_its[k], sm_its[k]);
   std::printf("Jacobi: %d at 33, %d at 65\n", jac_its[0], jac_its[1]);
   EXPECT_LE(mg_its[2], 1.5 * mg_its[0]);
   EXPECT_LE(mg_its[2], 50);
+  EXPECT_LE(sm_its[2], 1.25 * sm_its[1]);  // 129 against 65
+  EXPECT_LE(sm_its[1], 1.25 * sm_its[0]);  // 65 against 33
+  EXPECT_LE(sm_its[2], 50);
   EXPECT_GE(jac_its[1], 1.5 * jac_its[0]);  // the problem does get harder with h
 }
 
-// A V-cycle is the same, bit for bit, on 1, 2 and 3 threads.
+// A V-cycle and the coarse operators (the Galerkin products, with the
+// smoothed P's wider pattern too) are the same, bit for bit, on 1, 2 and 3
+// threads.
 TEST(Multigrid, CycleIndependentOfTheThreadCount) {
   Stretched s(33);
-  std::vector<double> ref;
-  for (int t : {1, 2, 3}) {
-    omp_set_num_threads(t);
-    Multigrid mg;
-    mg.setup(s.K, s.ids(), 33, 33, 1);
-    std::vector<double> b(3 * s.ids().size()), x(b.size());
-    for (size_t k = 0; k < b.size(); ++k) b[k] = std::cos(0.1 * double(k));
-    mg.apply(b.data(), x.data());
-    if (ref.empty()) ref = x;
-    else EXPECT_EQ(x, ref) << t << " threads";
+  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed}) {
+    std::vector<double> ref;
+    std::vector<std::vector<double>> ref_ops;
+    for (int t : {1, 2, 3}) {
+      omp_set_num_threads(t);
+      MultigridSettings st;
+      st.interpolation = ip;
+      Multigrid mg(st);
+      mg.setup(s.K, s.ids(), 33, 33, 1);
+      ASSERT_GE(mg.levels(), 3);
+      std::vector<double> b(3 * s.ids().size()), x(b.size());
+      for (size_t k = 0; k < b.size(); ++k) b[k] = std::cos(0.1 * double(k));
+      mg.apply(b.data(), x.data());
+      std::vector<std::vector<double>> ops;
+      for (int l = 1; l < mg.levels(); ++l) ops.push_back(mg.matrix(l).val);
+      if (ref.empty()) {
+        ref = x;
+        ref_ops = ops;
+      } else {
+        EXPECT_EQ(x, ref) << t << " threads";
+        EXPECT_EQ(ops, ref_ops) << t << " threads";
+      }
+    }
   }
   omp_set_num_threads(1);
 }

@@ -23,7 +23,9 @@ void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
     }
     if (coarse.empty() || coarse.size() == levels_.back().ids.size()) break;
     levels_.back().stride = stride;
-    levels_.back().P = make_prolongation(levels_.back().ids, coarse, ni, nj, stride, scratch);
+    levels_.back().smoothed =
+        s_.interpolation != Interpolation::Bilinear && int(levels_.size()) <= s_.smoothed_levels;
+    levels_.back().P0 = make_prolongation(levels_.back().ids, coarse, ni, nj, stride, scratch);
     levels_.emplace_back();
     levels_.back().ids = std::move(coarse);
     stride *= 2;
@@ -50,9 +52,15 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
   const int last = levels() - 1;
   for (int l = 0; l <= last; ++l) {
     const double t0 = omp_get_wtime();
-    if (l > 0) galerkin(matrix(l - 1), levels_[l - 1].P, levels_[l].A, fresh);
-    if (l < last) levels_[l].smoother.setup(matrix(l), s_.degree, s_.ratio);
-    else coarse_.factor(matrix(l), fresh);
+    if (l > 0) galerkin(matrix(l - 1), levels_[l - 1].transfer(), levels_[l - 1].AP, levels_[l].A, fresh);
+    Level& L = levels_[l];
+    if (l < last) {
+      L.smoother.setup(matrix(l), s_.degree, s_.ratio);
+      if (L.smoothed)
+        smooth_prolongation(matrix(l), L.smoother.dinv(), L.smoother.estimate(), L.P0, L.AP0, L.P, fresh);
+    } else {
+      coarse_.factor(matrix(l), fresh);
+    }
     stats_[l].blocks = matrix(l).blocks();
     stats_[l].setup_seconds += omp_get_wtime() - t0;
   }
@@ -74,11 +82,11 @@ void Multigrid::cycle(int l, const double* b, double* x) {
   const BlockMatrix& A = matrix(l);
   L.smoother.smooth(A, b, x, true);
   A.residual(b, x, L.r.data());
-  restrict_to(L.P, L.r.data(), C.b.data());
+  restrict_to(L.transfer(), L.r.data(), C.b.data());
   const double t1 = omp_get_wtime();
   cycle(l + 1, C.b.data(), C.x.data());
   const double t2 = omp_get_wtime();
-  prolong_add(L.P, C.x.data(), x);
+  prolong_add(L.transfer(), C.x.data(), x);
   L.smoother.smooth(A, b, x, false);
   st.seconds += (t1 - t0) + (omp_get_wtime() - t2);
 }

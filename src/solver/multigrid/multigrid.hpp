@@ -11,15 +11,23 @@
 
 #include "solver/multigrid/block_matrix.hpp"
 #include "solver/multigrid/coarse_solve.hpp"
+#include "solver/multigrid/smoothed_prolongation.hpp"
 #include "solver/multigrid/smoother.hpp"
 #include "solver/multigrid/transfer.hpp"
 
 namespace drape {
 
+// How a coarse level's correction reaches the level above: bilinear
+// interpolation of the displacements (P0), or P0 smoothed by one damped
+// block-Jacobi step in the fine operator (smoothed_prolongation.hpp).
+enum class Interpolation { Bilinear, Smoothed };
+
 struct MultigridSettings {
   int degree = 1;             // Chebyshev steps before and after the coarse correction (1 fastest at 129)
   double ratio = 10;          // the smoother damps D^-1 A's spectrum above lmax / ratio
   int64_t coarsest = 100;     // particles at most on the directly solved level
+  Interpolation interpolation = Interpolation::Bilinear;  // the faster on the drape (set-up included)
+  int smoothed_levels = 1000;  // the finest levels whose P is smoothed (the coarse operators widen with each)
 };
 
 struct MultigridLevelStats {
@@ -60,7 +68,11 @@ class Multigrid {
     std::vector<int64_t> ids;  // grid particles, in the finest level's order
     int stride = 1;
     BlockMatrix A;             // P^T A P of the level above (level 0: a0_)
-    Prolongation P;            // from the next level down to this one
+    Prolongation P0;           // bilinear, from the next level down to this one
+    Prolongation P;            // P0 smoothed (where `smoothed`)
+    BlockMatrix AP0, AP;       // A P0 and A P: the products' workspaces
+    bool smoothed = false;
+    const Prolongation& transfer() const { return smoothed ? P : P0; }
     Chebyshev smoother;
     std::vector<double> b, x, r;
   };

@@ -58,6 +58,7 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
     apply_dinv(r_.data(), eig_.data());
     lam = std::sqrt(norm2(eig_));
   }
+  estimate_ = lam;
   lmax_ = 1.1 * lam;
   lmin_ = lmax_ / ratio;
 }

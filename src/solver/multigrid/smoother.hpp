@@ -19,13 +19,17 @@ class Chebyshev {
   // x improved towards A x = b (x = 0 on entry when `zero`).
   void smooth(const BlockMatrix& A, const double* b, double* x, bool zero);
   double lambda_max() const { return lmax_; }
+  // The power iteration's estimate of D^-1 A's spectral radius, and D^-1
+  // (9 a row): the smoothed prolongation's step.
+  double estimate() const { return estimate_; }
+  const std::vector<double>& dinv() const { return dinv_; }
   // The next setup estimates lmax from scratch (no history carried).
   void forget() { eig_.clear(); }
 
  private:
   void apply_dinv(const double* r, double* out) const;
   std::vector<double> dinv_, r_, d_, z_, eig_;  // eig_: the power iteration's vector
-  double lmax_ = 1, lmin_ = 0.1;
+  double lmax_ = 1, lmin_ = 0.1, estimate_ = 1;
   int degree_ = 2;
 };
 

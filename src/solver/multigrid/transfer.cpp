@@ -1,6 +1,9 @@
 #include "solver/multigrid/transfer.hpp"
 
 #include <algorithm>
+#include <utility>
+
+#include "solver/multigrid/block_product.hpp"
 
 namespace drape {
 
@@ -32,100 +35,66 @@ std::vector<int64_t> coarse_points(const std::vector<int64_t>& ids, int ni, int 
 
 Prolongation make_prolongation(const std::vector<int64_t>& fine_ids, const std::vector<int64_t>& coarse_ids, int ni,
                                int nj, int stride, std::vector<int32_t>& scratch) {
-  Prolongation P;
-  P.fine = int64_t(fine_ids.size());
-  P.coarse = int64_t(coarse_ids.size());
+  Prolongation out;
+  BlockMatrix& P = out.P;
+  P.rows = int64_t(fine_ids.size());
   for (size_t k = 0; k < coarse_ids.size(); ++k) scratch[coarse_ids[k]] = int32_t(k);
-  P.start.assign(size_t(P.fine) + 1, 0);
-  for (int64_t f = 0; f < P.fine; ++f) {
+  P.start.assign(size_t(P.rows) + 1, 0);
+  for (int64_t f = 0; f < P.rows; ++f) {
     const int64_t p = fine_ids[f];
     int ii[2], jj[2];
     double wi[2], wj[2];
     const int ni_ = line_weights(int(p / nj), ni, stride, ii, wi);
     const int nj_ = line_weights(int(p % nj), nj, stride, jj, wj);
+    std::vector<std::pair<int32_t, double>> row;
     for (int a = 0; a < ni_; ++a)
       for (int b = 0; b < nj_; ++b) {
         const int32_t c = scratch[int64_t(ii[a]) * nj + jj[b]];
-        if (c < 0) continue;  // not an unknown: no correction from there
-        P.col.push_back(c);
-        P.w.push_back(wi[a] * wj[b]);
+        if (c >= 0) row.emplace_back(c, wi[a] * wj[b]);  // else not an unknown: no correction from there
       }
+    std::sort(row.begin(), row.end());
+    for (const auto& [c, w] : row) {
+      P.col.push_back(c);
+      const double blk[9] = {w, 0, 0, 0, w, 0, 0, 0, w};
+      P.val.insert(P.val.end(), blk, blk + 9);
+    }
     P.start[f + 1] = int64_t(P.col.size());
   }
   for (int64_t p : coarse_ids) scratch[p] = -1;
-  // The transpose, fine points ascending in each coarse point's list.
-  P.t_start.assign(size_t(P.coarse) + 1, 0);
-  for (int32_t c : P.col) ++P.t_start[c + 1];
-  for (int64_t c = 0; c < P.coarse; ++c) P.t_start[c + 1] += P.t_start[c];
-  P.t_row.resize(P.col.size());
-  P.t_w.resize(P.col.size());
-  std::vector<int64_t> fill(P.t_start.begin(), P.t_start.end() - 1);
-  for (int64_t f = 0; f < P.fine; ++f)
+  transpose(P, int64_t(coarse_ids.size()), out.T);
+  return out;
+}
+
+void transpose(const BlockMatrix& P, int64_t coarse, BlockMatrix& T) {
+  T.rows = coarse;
+  T.start.assign(size_t(coarse) + 1, 0);
+  for (int32_t c : P.col) ++T.start[c + 1];
+  for (int64_t c = 0; c < coarse; ++c) T.start[c + 1] += T.start[c];
+  T.col.resize(P.col.size());
+  T.val.resize(P.val.size());
+  std::vector<int64_t> fill(T.start.begin(), T.start.end() - 1);
+  for (int64_t f = 0; f < P.rows; ++f)
     for (int64_t k = P.start[f]; k < P.start[f + 1]; ++k) {
-      P.t_row[fill[P.col[k]]] = int32_t(f);
-      P.t_w[fill[P.col[k]]++] = P.w[k];
+      const int64_t t = fill[P.col[k]]++;
+      T.col[t] = int32_t(f);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) T.val[9 * t + 3 * j + i] = P.val[9 * k + 3 * i + j];
     }
-  return P;
 }
 
 void prolong_add(const Prolongation& P, const double* xc, double* xf) {
+  const BlockMatrix& M = P.P;
 #pragma omp parallel for schedule(static)
-  for (int64_t f = 0; f < P.fine; ++f)
-    for (int64_t k = P.start[f]; k < P.start[f + 1]; ++k)
-      for (int d = 0; d < 3; ++d) xf[3 * f + d] += P.w[k] * xc[3 * int64_t(P.col[k]) + d];
+  for (int64_t f = 0; f < M.rows; ++f)
+    for (int64_t k = M.start[f]; k < M.start[f + 1]; ++k)
+      add_block_times(&M.val[9 * k], xc + 3 * int64_t(M.col[k]), 1.0, xf + 3 * f);
 }
 
-void restrict_to(const Prolongation& P, const double* rf, double* bc) {
-#pragma omp parallel for schedule(static)
-  for (int64_t c = 0; c < P.coarse; ++c) {
-    double s[3] = {0, 0, 0};
-    for (int64_t k = P.t_start[c]; k < P.t_start[c + 1]; ++k)
-      for (int d = 0; d < 3; ++d) s[d] += P.t_w[k] * rf[3 * int64_t(P.t_row[k]) + d];
-    for (int d = 0; d < 3; ++d) bc[3 * c + d] = s[d];
-  }
-}
+void restrict_to(const Prolongation& P, const double* rf, double* bc) { P.T.multiply(rf, bc); }
 
-void galerkin(const BlockMatrix& A, const Prolongation& P, BlockMatrix& Ac, bool pattern) {
-  // Row I of P^T A P: over the fine points f that I interpolates to, their
-  // blocks A(f, g), and g's coarse points J.
-  auto terms = [&](int64_t I, auto&& add) {
-    for (int64_t a = P.t_start[I]; a < P.t_start[I + 1]; ++a) {
-      const int64_t f = P.t_row[a];
-      const double wf = P.t_w[a];
-      for (int64_t k = A.start[f]; k < A.start[f + 1]; ++k) {
-        const int64_t g = A.col[k];
-        const double* blk = &A.val[9 * k];
-        for (int64_t b = P.start[g], e = P.start[g + 1]; b < e; ++b) add(P.col[b], wf * P.w[b], blk);
-      }
-    }
-  };
-  if (pattern) {
-    std::vector<std::vector<int32_t>> cols(size_t(P.coarse));
-#pragma omp parallel for schedule(static)
-    for (int64_t I = 0; I < P.coarse; ++I) {
-      terms(I, [&](int32_t J, double, const double*) { cols[I].push_back(J); });
-      std::sort(cols[I].begin(), cols[I].end());
-      cols[I].erase(std::unique(cols[I].begin(), cols[I].end()), cols[I].end());
-    }
-    Ac.set_pattern(cols);
-  }
-#pragma omp parallel
-  {
-    // Each thread's map from a coarse column to its block in the current
-    // row: set for the row's pattern, cleared after it (no searches).
-    std::vector<int64_t> slot(size_t(P.coarse), -1);
-#pragma omp for schedule(static)
-    for (int64_t I = 0; I < P.coarse; ++I) {
-      for (int64_t k = Ac.start[I]; k < Ac.start[I + 1]; ++k) slot[Ac.col[k]] = k;
-      std::fill(Ac.val.begin() + 9 * Ac.start[I], Ac.val.begin() + 9 * Ac.start[I + 1], 0.0);
-      double* __restrict val = Ac.val.data();
-      terms(I, [&](int32_t J, double w, const double* __restrict blk) {
-        double* __restrict out = val + 9 * slot[J];
-        for (int i = 0; i < 9; ++i) out[i] += w * blk[i];
-      });
-      for (int64_t k = Ac.start[I]; k < Ac.start[I + 1]; ++k) slot[Ac.col[k]] = -1;
-    }
-  }
+void galerkin(const BlockMatrix& A, const Prolongation& P, BlockMatrix& AP, BlockMatrix& Ac, bool pattern) {
+  block_product(A, P.P, P.coarse(), AP, pattern);
+  block_product(P.T, AP, P.coarse(), Ac, pattern);
 }
 
 }  // namespace drape
