@@ -1,0 +1,27 @@
+#pragma once
+// Room on disk for a parallel HDF5 file, claimed before HDF5 needs it.
+// HDF5 1.10 cannot recover from a write that fails (a full disk, a file-size
+// limit): the file then fails to close, and its half-closed handle crashes
+// the library's cleanup in MPI_Finalize. So the writers claim the bytes a
+// piece will need first, and a refusal ends the run while the file is still
+// whole and closes normally.
+#include <cstdint>
+#include <string>
+
+namespace drape {
+
+// Makes `path` at least `bytes` long with its blocks allocated
+// (posix_fallocate); HDF5 trims the file to its own end when it closes it.
+// Throws std::runtime_error with the system's reason when there is no room.
+void reserve_file_space(const std::string& path, int64_t bytes);
+
+// What HDF5 allocates for the metadata of `data` bytes of datasets and
+// attributes written together (object headers, heaps): generous, so that
+// a claim never falls short.
+int64_t metadata_allowance(int64_t data);
+// Claimed beyond the running total, for HDF5's own bookkeeping blocks.
+constexpr int64_t kReserveSlack = int64_t(16) << 10;
+// A single piece's claim: its data, the allowance and the slack.
+inline int64_t with_metadata_margin(int64_t data) { return data + metadata_allowance(data) + kReserveSlack; }
+
+}  // namespace drape
