@@ -6,9 +6,13 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <thread>
 
 #include "decomp/collective.hpp"
 #include "io/agreed_write.hpp"
@@ -201,6 +205,19 @@ int64_t checkpoint_bytes(const Cloth& c, const std::string& toml, Fabric fabric,
   return bytes + int64_t(toml.size() + fabric.name.size() + fabric.source.size() + levels);
 }
 
+// Test hook: DRAPE_TEST_STALL_CHECKPOINT=POINT:SECONDS pauses each checkpoint
+// write at POINT (before-data, mid-data, before-rename, after-rename), rank 0
+// saying so on stderr, so that a test can kill the run there and check that
+// what is left on disk restarts (tests/kill_checkpoint_np2.sh).
+void stall_for_test(const char* point, int rank) {
+  const char* spec = std::getenv("DRAPE_TEST_STALL_CHECKPOINT");
+  const char* colon = spec ? std::strchr(spec, ':') : nullptr;
+  if (!colon || std::string(spec, colon) != point) return;
+  if (rank == 0) std::fprintf(stderr, "drape: test: checkpoint write stalled at %s\n", point);
+  std::fflush(stderr);
+  std::this_thread::sleep_for(std::chrono::duration<double>(std::atof(colon + 1)));
+}
+
 // Pushes a file's data to the disk before it is renamed into place.
 void sync_file(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY);
@@ -257,7 +274,9 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
       put_string(root, "digest", hex(digest));
     });
     const Writer w{comm, tmp, dxpl.get()};
+    stall_for_test("before-data", rank);
     write_state(root, cloth, owned, w);
+    stall_for_test("mid-data", rank);
     write_fabric(root, fabric, rank, w);
     if (!amrc_levels.empty()) {  // rank 0 writes the whole (replicated) tree
       const hsize_t n = amrc_levels.size();
@@ -282,8 +301,10 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
   if (rank == 0) {
     try {
       sync_file(tmp);
+      stall_for_test("before-rename", rank);
       if (std::rename(tmp.c_str(), path.c_str()) != 0)
         throw std::runtime_error("cannot rename " + tmp + " to " + path);
+      stall_for_test("after-rename", rank);
     } catch (const std::exception& e) {
       error = e.what();
       std::remove(tmp.c_str());
