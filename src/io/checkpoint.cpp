@@ -255,7 +255,7 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
     // leave a file that cannot be closed (reserve.hpp).
     agreed_write(comm, tmp, [&] {
       if (rank == 0)
-        reserve_file_space(tmp, with_metadata_margin(checkpoint_bytes(cloth, scene_toml, fabric, amrc_levels.size())));
+        reserve_file_space(tmp, 0, with_metadata_margin(checkpoint_bytes(cloth, scene_toml, fabric, amrc_levels.size())));
     });
     const hid_t root = file.get();
     agreed_write(comm, tmp, [&] {

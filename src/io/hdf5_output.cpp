@@ -204,9 +204,10 @@ struct Hdf5Output::Impl {
   // metadata for them) before HDF5 allocates them: a write it cannot finish
   // would leave a file that cannot be closed (reserve.hpp). Rank 0 claims.
   void reserve(int64_t bytes) {
+    const int64_t before = claimed;
     claimed += bytes + metadata_allowance(bytes);
     agreed([&] {
-      if (rank == 0) reserve_file_space(tmp_path, claimed + kReserveSlack);
+      if (rank == 0) reserve_file_space(tmp_path, before, claimed + kReserveSlack);
     });
   }
   // Runs one piece of the collective write, agreed on by all ranks (agreed_write.hpp).

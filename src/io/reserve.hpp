@@ -10,10 +10,12 @@
 
 namespace drape {
 
-// Makes `path` at least `bytes` long with its blocks allocated
-// (posix_fallocate); HDF5 trims the file to its own end when it closes it.
-// Throws std::runtime_error with the system's reason when there is no room.
-void reserve_file_space(const std::string& path, int64_t bytes);
+// Makes `path` at least `end` bytes long with the blocks from `from` on
+// allocated (posix_fallocate; only the new range, which is cheap also where
+// the C library has to write it); HDF5 trims the file to its own end when it
+// closes it. Throws std::runtime_error with the system's reason when there is
+// no room.
+void reserve_file_space(const std::string& path, int64_t from, int64_t end);
 
 // What HDF5 allocates for the metadata of `data` bytes of datasets and
 // attributes written together (object headers, heaps): generous, so that
