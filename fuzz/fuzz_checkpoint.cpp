@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -13,10 +15,17 @@
 
 namespace {
 
+// One file per process, so parallel fuzzing jobs do not collide; removed at exit.
+std::string file_name() {
+  return (std::filesystem::temp_directory_path() / ("drape-fuzz-checkpoint-" + std::to_string(::getpid()) + ".h5"))
+      .string();
+}
+
 const std::string& file_path() {
-  static const std::string path =
-      (std::filesystem::temp_directory_path() / ("drape-fuzz-checkpoint-" + std::to_string(::getpid()) + ".h5"))
-          .string();
+  static const std::string path = [] {
+    std::atexit([] { std::remove(file_name().c_str()); });
+    return file_name();
+  }();
   return path;
 }
 

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -14,12 +15,20 @@
 
 namespace {
 
-// One directory per process, so parallel fuzzing jobs do not collide.
+// One directory per process, so parallel fuzzing jobs do not collide;
+// removed at exit.
+std::filesystem::path dir_name() {
+  return std::filesystem::temp_directory_path() / ("drape-fuzz-fabric-" + std::to_string(::getpid()));
+}
+
 const std::filesystem::path& work_dir() {
   static const std::filesystem::path dir = [] {
-    auto d = std::filesystem::temp_directory_path() / ("drape-fuzz-fabric-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(d);
-    return d;
+    std::filesystem::create_directories(dir_name());
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(dir_name(), ec);
+    });
+    return dir_name();
   }();
   return dir;
 }
