@@ -223,6 +223,7 @@ void Hdf5Output::Impl::open(const Scene& scene, const std::string& toml, const F
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   agreed([&] { open_file(true); });
   // Room for the header first (see reserve()).
+  claimed = 0;
   int64_t fabric_bytes = int64_t(fabric.name.size() + fabric.source.size()) + 256;
   for (const Curve* c : {&fabric.tensile[0].load, &fabric.tensile[0].unload, &fabric.tensile[1].load,
                          &fabric.tensile[1].unload, &fabric.bending[0].load, &fabric.bending[0].unload,
@@ -291,6 +292,7 @@ bool Hdf5Output::Impl::reopen(const std::string& toml, int resume_step) {
     file.reset();
     return false;
   }
+  reserve(int64_t(toml.size()));  // the new scene_toml
   agreed([&] { rewrite_frames(toml, resume_step); });
   return true;
 }
