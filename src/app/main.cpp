@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   const bool root = drape::rank_of(MPI_COMM_WORLD) == 0;
   drape::install_stop_signals();
+  drape::ignore_file_size_signal();
 
   CLI::App app{"drape: hybrid MPI+OpenMP simulation of woven cloth draping, with a "
                "material model built from Kawabata (KES) fabric measurements.\n"

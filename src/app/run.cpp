@@ -95,6 +95,20 @@ void inject_nan(Cloth& c, const ActiveLists& lists) {
     }
 }
 
+// A file rank 0 writes alone (the picture, the report): its failure (a full
+// disk) is every rank's, so that all end with the same status and message.
+template <class Write>
+void on_root_agreed(MPI_Comm comm, Write&& write) {
+  std::string error;
+  if (rank_of(comm) == 0) try {
+      write();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  error = root_error(comm, error);
+  if (!error.empty()) throw CollectiveError(error);
+}
+
 void add_step(RunCounters& n, const StepStats& st, int64_t active) {
   n.iterations += st.iterations;
   n.particle_iterations += st.iterations * active;
@@ -439,17 +453,21 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       if (cloth.step != last_frame) write_frame();  // the final state
       h5->finish();
       if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
-      if (rank == 0 && scene.output.picture)
-        render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png", 1024, 768,
-                       what_was_solved(scene, cloth, sum, loop.free_particles()));
+      if (scene.output.picture)
+        on_root_agreed(comm, [&] {
+          render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png", 1024, 768,
+                         what_was_solved(scene, cloth, sum, loop.free_particles()));
+        });
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = 1e-6 * double(red.sum_i64(process_cpu_microseconds()));  // collective
     sum.peak_rss = int64_t(red.max(double(peak_rss_bytes())));                    // collective; exact below 2^53
-    if (rank == 0) {
+    on_root_agreed(comm, [&] {
       write_file_atomically(opt.output_dir + "/report.json",
                             report_json(scene, fabric, cloth, sum, tm, wall, cpu, ranks, threads, ck.hex(),
                                         depth, loop.free_particles()) + "\n");
+    });
+    if (rank == 0) {
       if (!opt.quiet) {
         Progress::Solved solved;
         solved.method = to_string(scene.solver.method);

@@ -29,6 +29,14 @@ void install_stop_signals() {
   sigaction(SIGINT, &sa, nullptr);
 }
 
+// Under a file-size limit (ulimit -f) the kernel sends SIGXFSZ to a process
+// writing past it, and its default action kills the process at once: no
+// message, a temporary file left behind, and on several ranks the others
+// waiting in a collective. Ignored, the write returns EFBIG instead, and the
+// run ends like on a full disk: exit 1, one message naming the file, the
+// temporary removed and the previous checkpoint kept.
+void ignore_file_size_signal() { std::signal(SIGXFSZ, SIG_IGN); }
+
 int stop_signal() { return g_signal; }
 
 const char* signal_name(int sig) {

@@ -6,6 +6,9 @@
 namespace drape {
 
 void install_stop_signals();
+// SIGXFSZ ignored (see signals.cpp): a write past a file-size limit fails
+// with EFBIG, which the writers report, instead of killing the run.
+void ignore_file_size_signal();
 // The signal received since install_stop_signals() (0: none).
 int stop_signal();
 // "SIGTERM", "SIGINT" or "signal N".

@@ -49,6 +49,17 @@ std::string root_error(MPI_Comm comm, const std::string& error) {
   return text;
 }
 
+std::string first_error(MPI_Comm comm, const std::string& error) {
+  const int size = size_of(comm);
+  int mine = error.empty() ? size : rank_of(comm), first = size;
+  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return "";
+  char text[512] = {0};
+  std::copy_n(error.data(), std::min(error.size(), sizeof text - 1), text);
+  MPI_Bcast(text, sizeof text, MPI_CHAR, first, comm);
+  return text;
+}
+
 void wait_for_all(MPI_Comm comm) { MPI_Barrier(comm); }
 
 void end_all_ranks(MPI_Comm comm, const std::string& what) {

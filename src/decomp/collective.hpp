@@ -23,6 +23,9 @@ unsigned or_over_ranks(MPI_Comm comm, unsigned value);
 uint64_t sum_over_ranks(MPI_Comm comm, uint64_t value);
 // Rank 0's `error` text on every rank (at most 511 bytes; empty: it went well).
 std::string root_error(MPI_Comm comm, const std::string& error);
+// The lowest failing rank's `error` text on every rank ("" where none failed):
+// for a step every rank does, which may fail on any of them (a write).
+std::string first_error(MPI_Comm comm, const std::string& error);
 // Every rank has arrived.
 void wait_for_all(MPI_Comm comm);
 // Ends every rank at once, this one naming itself and `what` on stderr: for

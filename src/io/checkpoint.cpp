@@ -6,13 +6,19 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <thread>
 
-#include "io/error.hpp"
 #include "decomp/collective.hpp"
+#include "io/agreed_write.hpp"
+#include "io/error.hpp"
 #include "io/h5.hpp"
+#include "io/reserve.hpp"
 #include "io/version.hpp"
 #include "solver/checksum.hpp"
 
@@ -130,10 +136,29 @@ std::string hex(uint64_t v) {
 
 // ------------------------------------------------------------- writing --
 
-void write_fabric(hid_t root, const Fabric& fabric, int rank, hid_t dxpl) {
-  Handle g = create_group(root, "fabric");
-  put_string(g.get(), "name", fabric.name);
-  put_string(g.get(), "source", fabric.source);
+// Writes the datasets of one file, each as a piece all ranks agree on
+// (agreed_write.hpp): a failed write on any rank fails them all together.
+struct Writer {
+  MPI_Comm comm;
+  std::string file;
+  hid_t dxpl;
+  void dataset(hid_t group, const std::string& name, hid_t file_type, hid_t mem_type, const void* data,
+               const Selection& sel) const {
+    agreed_write(comm, file, [&] { write_dataset(group, name, file_type, mem_type, data, sel, dxpl); });
+  }
+  Handle group(hid_t parent, const std::string& name) const {
+    Handle g;
+    agreed_write(comm, file, [&] { g = create_group(parent, name); });
+    return g;
+  }
+};
+
+void write_fabric(hid_t root, const Fabric& fabric, int rank, const Writer& w) {
+  Handle g = w.group(root, "fabric");
+  agreed_write(w.comm, w.file, [&] {
+    put_string(g.get(), "name", fabric.name);
+    put_string(g.get(), "source", fabric.source);
+  });
   auto write_rows = [&](const std::string& name, const std::vector<double>& v, hsize_t cols) {
     const hsize_t rows = v.size() / cols;
     std::vector<hsize_t> dims = {rows};
@@ -143,7 +168,7 @@ void write_fabric(hid_t root, const Fabric& fabric, int rank, hid_t dxpl) {
       check_status(H5Sselect_none(sel.file.get()), "selecting nothing");
       check_status(H5Sselect_none(sel.mem.get()), "selecting nothing");
     }
-    write_dataset(g.get(), name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), sel, dxpl);
+    w.dataset(g.get(), name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), sel);
   };
   write_rows("numbers", fabric_numbers(fabric), 1);
   Fabric copy = fabric;
@@ -155,21 +180,42 @@ void write_fabric(hid_t root, const Fabric& fabric, int rank, hid_t dxpl) {
   }
 }
 
-void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, hid_t dxpl) {
-  Handle g = create_group(root, "state");
+void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, const Writer& w) {
+  Handle g = w.group(root, "state");
   const int ni = c.grid.ni, nj = c.grid.nj;
   const Selection s1 = select_blocks(owned, ni, nj, 1);
   const Selection s2 = select_blocks(owned, ni, nj, 2);
   const Selection s3 = select_blocks(owned, ni, nj, 3);
   const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c8 = H5T_NATIVE_UINT8;
-  write_dataset(g.get(), "positions", f64, d, c.x(), s3, dxpl);
-  write_dataset(g.get(), "tension", f64, d, c.tension(), s2, dxpl);
-  write_dataset(g.get(), "moment", f64, d, c.moment(), s2, dxpl);
-  write_dataset(g.get(), "shear", f64, d, c.shear(), s1, dxpl);
-  write_dataset(g.get(), "x1", f64, d, c.x1.data(), s3, dxpl);
-  write_dataset(g.get(), "x2", f64, d, c.x2.data(), s3, dxpl);
-  write_dataset(g.get(), "flags", u8, c8, c.flags.data(), s1, dxpl);
-  write_dataset(g.get(), "level", u8, c8, c.level.data(), s1, dxpl);
+  w.dataset(g.get(), "positions", f64, d, c.x(), s3);
+  w.dataset(g.get(), "tension", f64, d, c.tension(), s2);
+  w.dataset(g.get(), "moment", f64, d, c.moment(), s2);
+  w.dataset(g.get(), "shear", f64, d, c.shear(), s1);
+  w.dataset(g.get(), "x1", f64, d, c.x1.data(), s3);
+  w.dataset(g.get(), "x2", f64, d, c.x2.data(), s3);
+  w.dataset(g.get(), "flags", u8, c8, c.flags.data(), s1);
+  w.dataset(g.get(), "level", u8, c8, c.level.data(), s1);
+}
+
+// The bytes a checkpoint's datasets and attributes hold, HDF5's metadata aside.
+int64_t checkpoint_bytes(const Cloth& c, const std::string& toml, Fabric fabric, size_t levels) {
+  int64_t bytes = 114 * c.grid.n();  // 14 doubles and 2 bytes per particle
+  for (auto& [name, curve] : curves_of(fabric)) bytes += 16 * int64_t(curve->q.size());
+  bytes += 8 * int64_t(fabric_numbers(fabric).size() + counter_numbers(RunCounters{}).size());
+  return bytes + int64_t(toml.size() + fabric.name.size() + fabric.source.size() + levels);
+}
+
+// Test hook: DRAPE_TEST_STALL_CHECKPOINT=POINT:SECONDS pauses each checkpoint
+// write at POINT (before-data, mid-data, before-rename, after-rename), rank 0
+// saying so on stderr, so that a test can kill the run there and check that
+// what is left on disk restarts (tests/kill_checkpoint_np2.sh).
+void stall_for_test(const char* point, int rank) {
+  const char* spec = std::getenv("DRAPE_TEST_STALL_CHECKPOINT");
+  const char* colon = spec ? std::strchr(spec, ':') : nullptr;
+  if (!colon || std::string(spec, colon) != point) return;
+  if (rank == 0) std::fprintf(stderr, "drape: test: checkpoint write stalled at %s\n", point);
+  std::fflush(stderr);
+  std::this_thread::sleep_for(std::chrono::duration<double>(std::atof(colon + 1)));
 }
 
 // Pushes a file's data to the disk before it is renamed into place.
@@ -193,32 +239,45 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
   const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters, amrc_levels));
 
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  {
-    Handle fapl = make_plist(H5P_FILE_ACCESS, "creating a file access property list");
-    check_status(H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL), "selecting the MPI-IO driver");
-    check_status(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18),
-                 "setting the file format version");
-    Handle file(check(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
-                      "cannot create " + tmp),
-                H5Fclose);
-    Handle dxpl = make_plist(H5P_DATASET_XFER, "creating a transfer property list");
-    check_status(H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE), "requesting collective I/O");
+  try {
+    Handle file, dxpl;
+    agreed_write(comm, tmp, [&] {
+      Handle fapl = make_plist(H5P_FILE_ACCESS, "creating a file access property list");
+      check_status(H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL), "selecting the MPI-IO driver");
+      check_status(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18),
+                   "setting the file format version");
+      file = Handle(check(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), "cannot create " + tmp),
+                    H5Fclose);
+      dxpl = make_plist(H5P_DATASET_XFER, "creating a transfer property list");
+      check_status(H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE), "requesting collective I/O");
+    });
+    // Room for all of it first: a write HDF5 starts and cannot finish would
+    // leave a file that cannot be closed (reserve.hpp).
+    agreed_write(comm, tmp, [&] {
+      if (rank == 0)
+        reserve_file_space(tmp, 0, with_metadata_margin(checkpoint_bytes(cloth, scene_toml, fabric, amrc_levels.size())));
+    });
     const hid_t root = file.get();
-    put_string(root, "format", kFormat);
-    put_int(root, "format_version", kFormatVersion);
-    put_string(root, "drape_version", DRAPE_VERSION);
-    put_int(root, "ni", cloth.grid.ni);
-    put_int(root, "nj", cloth.grid.nj);
-    put_int(root, "step", cloth.step);
-    put_double(root, "time", cloth.time);
-    put_double(root, "dt", cloth.dt);
-    put_double(root, "dt_prev", cloth.dt_prev);
-    put_string(root, "scene_toml", scene_toml);
-    const std::vector<double> cn = counter_numbers(counters);
-    put_numbers(root, "counters", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, cn.data(), cn.size());
-    put_string(root, "digest", hex(digest));
-    write_state(root, cloth, owned, dxpl.get());
-    write_fabric(root, fabric, rank, dxpl.get());
+    agreed_write(comm, tmp, [&] {
+      put_string(root, "format", kFormat);
+      put_int(root, "format_version", kFormatVersion);
+      put_string(root, "drape_version", DRAPE_VERSION);
+      put_int(root, "ni", cloth.grid.ni);
+      put_int(root, "nj", cloth.grid.nj);
+      put_int(root, "step", cloth.step);
+      put_double(root, "time", cloth.time);
+      put_double(root, "dt", cloth.dt);
+      put_double(root, "dt_prev", cloth.dt_prev);
+      put_string(root, "scene_toml", scene_toml);
+      const std::vector<double> cn = counter_numbers(counters);
+      put_numbers(root, "counters", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, cn.data(), cn.size());
+      put_string(root, "digest", hex(digest));
+    });
+    const Writer w{comm, tmp, dxpl.get()};
+    stall_for_test("before-data", rank);
+    write_state(root, cloth, owned, w);
+    stall_for_test("mid-data", rank);
+    write_fabric(root, fabric, rank, w);
     if (!amrc_levels.empty()) {  // rank 0 writes the whole (replicated) tree
       const hsize_t n = amrc_levels.size();
       Selection sel{make_space({n}), make_space({n}), rank == 0 ? n : 0};
@@ -226,18 +285,26 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
         check_status(H5Sselect_none(sel.file.get()), "selecting nothing");
         check_status(H5Sselect_none(sel.mem.get()), "selecting nothing");
       }
-      write_dataset(root, "amrc_levels", H5T_STD_U8LE, H5T_NATIVE_UINT8, amrc_levels.data(), sel, dxpl.get());
+      w.dataset(root, "amrc_levels", H5T_STD_U8LE, H5T_NATIVE_UINT8, amrc_levels.data(), sel);
     }
     dxpl.reset();
-    file.close("closing " + tmp);  // collective: every rank's blocks are in
+    // Collective: every rank's blocks are in (and the metadata, which may
+    // be what meets a full disk).
+    agreed_write(comm, tmp, [&] { file.close("closing " + tmp); });
+  } catch (const CollectiveError& e) {
+    // Every rank is here, its handles closed: the previous checkpoint stays.
+    if (rank == 0) std::remove(tmp.c_str());
+    throw CollectiveError("checkpoint: " + std::string(e.what()));
   }
   // Rank 0 makes it durable and publishes it; the others learn the outcome.
   std::string error;
   if (rank == 0) {
     try {
       sync_file(tmp);
+      stall_for_test("before-rename", rank);
       if (std::rename(tmp.c_str(), path.c_str()) != 0)
         throw std::runtime_error("cannot rename " + tmp + " to " + path);
+      stall_for_test("after-rename", rank);
     } catch (const std::exception& e) {
       error = e.what();
       std::remove(tmp.c_str());

@@ -40,9 +40,11 @@
 #include <vector>
 
 #include "decomp/collective.hpp"
+#include "io/agreed_write.hpp"
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/h5.hpp"
+#include "io/reserve.hpp"
 #include "io/version.hpp"
 #include "io/output.hpp"
 #include "solver/cloth.hpp"
@@ -188,34 +190,61 @@ struct Hdf5Output::Impl {
   Handle file, frames, dxpl;
   std::vector<FrameRecord> records;
   bool finished = false;
+  int64_t claimed = 0;  // bytes the file will hold, as far as claimed so far
 
   void open(const Scene& scene, const std::string& toml, const Fabric& fabric);
   bool reopen(const std::string& toml, int resume_step);
+  void rewrite_frames(const std::string& toml, int resume_step);
   void open_file(bool create);
   void write_quads();
   void write(const FrameView& f);
   void close_and_publish();
   void abandon() noexcept;
+  // Claims room for `bytes` more of datasets and attributes (and HDF5's
+  // metadata for them) before HDF5 allocates them: a write it cannot finish
+  // would leave a file that cannot be closed (reserve.hpp). Rank 0 claims.
+  void reserve(int64_t bytes) {
+    const int64_t before = claimed;
+    claimed += bytes + metadata_allowance(bytes);
+    agreed([&] {
+      if (rank == 0) reserve_file_space(tmp_path, before, claimed + kReserveSlack);
+    });
+  }
+  // Runs one piece of the collective write, agreed on by all ranks (agreed_write.hpp).
+  template <class Piece>
+  void agreed(Piece&& piece) {
+    agreed_write(comm, tmp_path, piece);
+  }
 };
 
 void Hdf5Output::Impl::open(const Scene& scene, const std::string& toml, const Fabric& fabric) {
   // Errors become exceptions with messages; HDF5's own stack printing would
   // only repeat them, from every rank.
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  open_file(true);
+  agreed([&] { open_file(true); });
+  // Room for the header first (see reserve()).
+  claimed = 0;
+  int64_t fabric_bytes = int64_t(fabric.name.size() + fabric.source.size()) + 256;
+  for (const Curve* c : {&fabric.tensile[0].load, &fabric.tensile[0].unload, &fabric.tensile[1].load,
+                         &fabric.tensile[1].unload, &fabric.bending[0].load, &fabric.bending[0].unload,
+                         &fabric.bending[1].load, &fabric.bending[1].unload, &fabric.shear.load,
+                         &fabric.shear.unload})
+    fabric_bytes += 16 * int64_t(c->q.size());
+  reserve(16 * int64_t(ni - 1) * (nj - 1) + int64_t(toml.size() + scene.name.size()) + fabric_bytes);
 
   // Attributes are metadata: every rank writes the same values.
   hid_t root = file.get();
-  put_string(root, "scene", scene.name);
-  put_string(root, "scene_toml", toml);
-  put_fabric(root, fabric);
-  put_obstacle(root, scene.obstacle);
-  put_int(root, "ni", ni);
-  put_int(root, "nj", nj);
-  put_string(root, "drape_version", DRAPE_VERSION);
-  put_string(root, "units", kUnits);
-
-  frames = create_group(root, "frames");
+  agreed([&] {
+    put_string(root, "scene", scene.name);
+    put_string(root, "scene_toml", toml);
+    put_fabric(root, fabric);
+    put_obstacle(root, scene.obstacle);
+    put_int(root, "ni", ni);
+    put_int(root, "nj", nj);
+    put_string(root, "drape_version", DRAPE_VERSION);
+    put_string(root, "units", kUnits);
+    frames = create_group(root, "frames");
+  });
   write_quads();
 }
 
@@ -238,22 +267,39 @@ void Hdf5Output::Impl::open_file(bool create) {
 // continue, or it is of another grid.
 bool Hdf5Output::Impl::reopen(const std::string& toml, int resume_step) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  // A copy that fails (a full disk) is an error: starting a new file would
+  // publish it over the run's frames.
   int ok = 0;
+  std::string error;
   if (rank == 0) {
     std::error_code ec;
-    ok = std::filesystem::is_regular_file(final_path, ec) &&
-         std::filesystem::copy_file(final_path, tmp_path,
-                                    std::filesystem::copy_options::overwrite_existing, ec) &&
-         !ec;
+    ok = std::filesystem::is_regular_file(final_path, ec);
+    if (ok && !std::filesystem::copy_file(final_path, tmp_path, std::filesystem::copy_options::overwrite_existing,
+                                          ec))
+      error = "cannot copy " + final_path + " to " + tmp_path + ": " + ec.message();
   }
+  error = root_error(comm, error);
+  if (!error.empty()) throw CollectiveError("HDF5 output: " + error);
   if (!root_decides(comm, ok)) return false;
-  open_file(false);
-  const hid_t root = file.get();
-  if (get_int(root, "ni") != ni || get_int(root, "nj") != nj ||
-      H5Lexists(root, "frames", H5P_DEFAULT) <= 0) {
+  if (rank == 0) claimed = int64_t(std::filesystem::file_size(tmp_path));
+  bool same_grid = false;
+  agreed([&] {
+    open_file(false);
+    const hid_t root = file.get();
+    same_grid = get_int(root, "ni") == ni && get_int(root, "nj") == nj && H5Lexists(root, "frames", H5P_DEFAULT) > 0;
+  });
+  if (!same_grid) {
     file.reset();
     return false;
   }
+  reserve(int64_t(toml.size()));  // the new scene_toml
+  agreed([&] { rewrite_frames(toml, resume_step); });
+  return true;
+}
+
+// The continued copy: this run's scene, the frames before resume_step.
+void Hdf5Output::Impl::rewrite_frames(const std::string& toml, int resume_step) {
+  const hid_t root = file.get();
   check_status(H5Adelete(root, "scene_toml"), "replacing attribute 'scene_toml'");
   put_string(root, "scene_toml", toml);
   frames = Handle(check(H5Gopen2(root, "frames", H5P_DEFAULT), "opening group /frames"), H5Gclose);
@@ -276,13 +322,13 @@ bool Hdf5Output::Impl::reopen(const std::string& toml, int resume_step) {
     else
       records.push_back(r);
   }
-  return true;
 }
 
 // Quad q = i*(NJ-1) + j: (i,j) (i+1,j) (i+1,j+1) (i,j+1), counter-clockwise
 // seen from +z when i runs along x and j along y. Rank 0 writes it all.
 void Hdf5Output::Impl::write_quads() {
-  Handle mesh = create_group(file.get(), "mesh");
+  Handle mesh;
+  agreed([&] { mesh = create_group(file.get(), "mesh"); });
   const hsize_t nq = hsize_t(ni - 1) * hsize_t(nj - 1);
   std::vector<int32_t> quads;
   if (rank == 0) {
@@ -298,8 +344,9 @@ void Hdf5Output::Impl::write_quads() {
     check_status(H5Sselect_none(sel.file.get()), "selecting nothing");
     check_status(H5Sselect_none(sel.mem.get()), "selecting nothing");
   }
-  write_dataset(mesh.get(), "quads", H5T_STD_I32LE, H5T_NATIVE_INT32, quads.data(), sel,
-                dxpl.get());
+  agreed([&] {
+    write_dataset(mesh.get(), "quads", H5T_STD_I32LE, H5T_NATIVE_INT32, quads.data(), sel, dxpl.get());
+  });
 }
 
 namespace {
@@ -332,9 +379,14 @@ void Hdf5Output::Impl::write(const FrameView& f) {
   if (all & (all >> 4) & 15u) throw CollectiveError("HDF5 output: ranks disagree on the arrays of a frame");
 
   const std::string name = frame_name(f.step);
-  Handle group = create_group(frames.get(), name);
-  put_int(group.get(), "step", f.step);
-  put_double(group.get(), "time", f.time);
+  const int64_t n = int64_t(ni) * nj;
+  reserve(n * (24 + (f.tension ? 16 : 0) + (f.moment ? 16 : 0) + (f.shear ? 8 : 0) + 3));
+  Handle group;
+  agreed([&] {
+    group = create_group(frames.get(), name);
+    put_int(group.get(), "step", f.step);
+    put_double(group.get(), "time", f.time);
+  });
 
   // active and flags as whole-grid arrays, filled where this rank owns.
   std::vector<uint8_t> active(size_t(ni) * nj, 0);
@@ -350,23 +402,30 @@ void Hdf5Output::Impl::write(const FrameView& f) {
   const Selection s3 = select_blocks(f.owned, ni, nj, 3);
   const hid_t g = group.get(), x = dxpl.get();
   const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c = H5T_NATIVE_UINT8;
-  write_dataset(g, "positions", f64, d, f.x, s3, x);
-  if (f.tension) write_dataset(g, "tension", f64, d, f.tension, s2, x);
-  if (f.moment) write_dataset(g, "moment", f64, d, f.moment, s2, x);
-  if (f.shear) write_dataset(g, "shear", f64, d, f.shear, s1, x);
-  write_dataset(g, "active", u8, c, active.data(), s1, x);
-  write_dataset(g, "flags", u8, c, f.flags, s1, x);
-  if (f.level) write_dataset(g, "level", u8, c, f.level, s1, x);
-  group.close("closing group /frames/" + name);
-  check_status(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "flushing " + tmp_path);
+  auto put = [&](const char* ds, hid_t file_type, hid_t mem_type, const void* v, const Selection& s) {
+    agreed([&] { write_dataset(g, ds, file_type, mem_type, v, s, x); });
+  };
+  put("positions", f64, d, f.x, s3);
+  if (f.tension) put("tension", f64, d, f.tension, s2);
+  if (f.moment) put("moment", f64, d, f.moment, s2);
+  if (f.shear) put("shear", f64, d, f.shear, s1);
+  put("active", u8, c, active.data(), s1);
+  put("flags", u8, c, f.flags, s1);
+  if (f.level) put("level", u8, c, f.level, s1);
+  agreed([&] {
+    group.close("closing group /frames/" + name);
+    check_status(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "flushing " + tmp_path);
+  });
   records.push_back({f.step, f.time, bool(f.tension), bool(f.moment), bool(f.shear),
                      bool(f.level)});
 }
 
 void Hdf5Output::Impl::close_and_publish() {
-  frames.close("closing group /frames");
-  dxpl.reset();
-  file.close("closing " + tmp_path);  // collective: every rank's data is in
+  agreed([&] {
+    frames.close("closing group /frames");
+    dxpl.reset();
+    file.close("closing " + tmp_path);  // collective: every rank's data is in
+  });
   wait_for_all(comm);
   // Rank 0 publishes both files; the others learn whether that worked.
   std::string error;

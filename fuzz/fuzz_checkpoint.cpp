@@ -1,0 +1,46 @@
+// libFuzzer harness: the checkpoint reader on a damaged file. The input's
+// bytes are written to a file (seeds: a real small checkpoint, mutated by
+// the fuzzer) and read back as a checkpoint. A damaged file must end in
+// InputError; HDF5's own error printing is off (read_checkpoint silences it).
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "io/checkpoint.hpp"
+#include "io/error.hpp"
+
+namespace {
+
+// One file per process, so parallel fuzzing jobs do not collide; removed at exit.
+std::string file_name() {
+  return (std::filesystem::temp_directory_path() / ("drape-fuzz-checkpoint-" + std::to_string(::getpid()) + ".h5"))
+      .string();
+}
+
+const std::string& file_path() {
+  static const std::string path = [] {
+    std::atexit([] { std::remove(file_name().c_str()); });
+    return file_name();
+  }();
+  return path;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  {
+    std::ofstream out(file_path(), std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  }
+  try {
+    const drape::CheckpointState ck = drape::read_checkpoint(file_path());
+    drape::Cloth copy = ck.cloth;
+    drape::restore_state(ck, copy);
+  } catch (const drape::InputError&) {
+  }
+  return 0;
+}
