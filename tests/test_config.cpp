@@ -82,6 +82,8 @@ std::vector<std::string> differences(const Scene& a, const Scene& b) {
   differ(same(ao.size, bo.size), "obstacle.size");
   differ(same(ao.radius, bo.radius), "obstacle.radius");
   differ(ao.floor == bo.floor, "obstacle.floor");
+  differ(same(ao.friction, bo.friction), "obstacle.friction");
+  differ(same(ao.floor_friction, bo.floor_friction), "obstacle.floor_friction");
   const auto &av = a.solver, &bv = b.solver;
   differ(same(av.dt, bv.dt), "solver.dt");
   differ(same(av.dt_min, bv.dt_min), "solver.dt_min");
@@ -234,6 +236,8 @@ TEST(Config, EveryFieldIsCompared) {
       {"obstacle.size", "[0.4, 0.4, 0.3]"},
       {"obstacle.radius", "0.3"},
       {"obstacle.floor", "false"},
+      {"obstacle.friction", "0.3"},
+      {"obstacle.floor_friction", "0.5"},
       {"solver.dt", "0.002"},
       {"solver.dt_min", "2e-05"},
       {"solver.dt_max", "0.005"},
@@ -433,6 +437,7 @@ const BadFile kBadFiles[] = {
     {"height_below_floor", "[cloth]\nheight = -0.1\n", 2, {"cloth.height", ">= 0"}},
     {"obstacle_size_negative", "[obstacle]\nsize = [0.4, -0.4, 0.4]\n", 2, {"obstacle.size", "> 0"}},
     {"radius_zero", "[obstacle]\nradius = 0\n", 2, {"obstacle.radius: must be > 0, got 0"}},
+    {"friction_negative", "[obstacle]\nfloor_friction = -0.2\n", 2, {"obstacle.floor_friction: must be >= 0, got -0.2"}},
     {"shape_unknown", "[obstacle]\nshape = \"cube\"\n", 2, {"obstacle.shape: must be one of box, sphere, none", "\"cube\""}},
     {"dt_negative", "[solver]\ndt = -0.001\n", 2, {"solver.dt: must be > 0, got -0.001"}},
     {"dt_above_max", "[solver]\ndt_max = 0.004\ndt = 0.01\n", 3, {"solver.dt", "[1e-05, 0.004]", "got 0.01"}},

@@ -75,6 +75,21 @@ World random_world(unsigned seed, bool amrc = false) {
   return w;
 }
 
+// Coulomb friction on the sphere and the floor, with a slip ramp as wide as
+// the jitter's slips (about 3 mm), so that particles lie both on the ramp
+// and beyond it. Returns how many particles a surface holds at x1.
+int with_friction(World& w) {
+  w.model.contact.friction = 0.4;
+  w.model.contact.floor_friction = 0.7;
+  w.model.contact.slip = 1e-3;
+  int held = 0;
+  for (int64_t p : w.lists.particles.items) {
+    double blk[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    held += friction_block(w.model.contact, &w.cloth.z[3 * p], &w.cloth.x1[3 * p], blk);
+  }
+  return held;
+}
+
 CostTerms term_cost(World& w, std::vector<double>& z) { return w.loop->evaluator().evaluate(z.data(), nullptr); }
 
 // (cp - cm) / 2h summed term by term: each difference then rounds at its own
@@ -181,6 +196,21 @@ INSTANTIATE_TEST_SUITE_P(EachTerm, GradientTerm,
                                            Term{"amrc_bend", false, false, true, false, 0.0, true},
                                            Term{"amrc_all", true, true, true, true, 1.0, true}),
                          [](const auto& info) { return std::string(info.param.name); });
+
+// The Newton term with Coulomb friction on the sphere and the floor (some
+// particles on the slip ramp, some beyond): its gradient J^T r, with J
+// friction's 3x3 block, against central differences. Plain and AMRC mesh.
+TEST(Gradient, FrictionMatchesCentralDifferences) {
+  for (bool amrc : {false, true}) {
+    World w = random_world(5, amrc);
+    ASSERT_GT(with_friction(w), 0);
+    w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
+    std::vector<double> ga(w.cloth.z.size());
+    w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
+    const std::vector<double> gf = central_difference(w);
+    EXPECT_LE(block_errors(w, ga, gf)[0], 1e-6) << (amrc ? "AMRC mesh" : "plain mesh");
+  }
+}
 
 TEST(Gradient, NumericModeMatchesAnalytic) {
   World w = random_world(7);
@@ -306,8 +336,10 @@ TEST(ElementKernels, HandDerivedHessianVectorMatchesDualReference) {
 // definite, zero off the free particles' positions, and its diagonal
 // estimate (stiffness_diagonal) positive where K's is.
 TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
-  for (bool amrc : {false, true}) {
+  for (bool amrc : {false, true})
+  for (bool friction : {false, true}) {
     World w = random_world(11, amrc);
+    if (friction) ASSERT_GT(with_friction(w), 0);
     Evaluator& ev = w.loop->evaluator();
     ev.hysteresis_forces(w.cloth.z.data());
     ev.evaluate(w.cloth.z.data(), nullptr);
@@ -350,8 +382,10 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
 // particles to rounding, on the plain and the AMRC mesh (hanging particles
 // folded onto their ends), and A is symmetric block by block.
 TEST(Stiffness, AssembledMatchesTheProduct) {
-  for (bool amrc : {false, true}) {
+  for (bool amrc : {false, true})
+  for (bool friction : {false, true}) {
     World w = random_world(13, amrc);
+    if (friction) ASSERT_GT(with_friction(w), 0);
     Evaluator& ev = w.loop->evaluator();
     ev.settled_cost(w.cloth.z.data());
     const size_t n = w.cloth.z.size();
@@ -374,7 +408,7 @@ TEST(Stiffness, AssembledMatchesTheProduct) {
     for (size_t r = 0; r < ids.size(); ++r)
       for (int k = 0; k < 3; ++k)
         EXPECT_NEAR(av[3 * r + k], kv[3 * ids[r] + k], 1e-12 * scale)
-            << "particle " << ids[r] << " axis " << k << (amrc ? " (AMRC)" : "");
+            << "particle " << ids[r] << " axis " << k << (amrc ? " (AMRC)" : "") << (friction ? " friction" : "");
     for (int64_t r = 0; r < A.rows; ++r)
       for (int64_t b = A.start[r]; b < A.start[r + 1]; ++b) {
         const double* t = A.block(A.col[b], int32_t(r));
@@ -394,7 +428,8 @@ TEST(Stiffness, AssembledMatchesTheProduct) {
 // the floor (a flat obstacle), the left-out terms vanish and K must be the
 // residual's whole derivative. Plain and AMRC mesh.
 TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
-  for (bool amrc : {false, true}) {
+  for (bool amrc : {false, true})
+  for (bool friction : {false, true}) {
     Scene s = flat_scene(13, 11, 0.12, 0.10);
     s.obstacle.floor = true;
     s.solver.dt = 2e-3;
@@ -411,6 +446,17 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
     for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
       for (int k = 0; k < 2; ++k) w.cloth.z[3 * p + k] *= 1.02;
       w.cloth.z[3 * p + 2] = 0.5 * layer + 0.3 * (w.cloth.z[3 * p] - w.cloth.z[0]) * 0.1;
+    }
+    // Friction: the step started at z less a slip along the floor of up to
+    // twice the ramp, so that the particles the floor held then slide, some
+    // on the ramp, some beyond.
+    std::mt19937_64 slips(11);
+    std::uniform_real_distribution<double> us(-1, 1);
+    if (friction) {
+      w.model.contact.floor_friction = 0.5;
+      w.model.contact.slip = 1e-4;
+      for (int64_t p = 0; p < w.cloth.grid.n(); ++p)
+        for (int k = 0; k < 3; ++k) w.cloth.x1[3 * p + k] = w.cloth.z[3 * p + k] - (k < 2 ? 2e-4 * us(slips) : 0.0);
     }
     Evaluator& ev = w.loop->evaluator();
     const size_t n = w.cloth.z.size();
@@ -443,7 +489,8 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
     for (int64_t p : w.lists.particles.items)
       for (int k = 0; k < 3; ++k) {
         const double fd = (rp[3 * p + k] - rm[3 * p + k]) / (2 * eps) * F0;
-        EXPECT_NEAR(kv[3 * p + k], fd, 1e-5 * scale) << "particle " << p << " axis " << k << (amrc ? " (AMRC)" : "");
+        EXPECT_NEAR(kv[3 * p + k], fd, 1e-5 * scale) << "particle " << p << " axis " << k << (amrc ? " (AMRC)" : "")
+                                                     << (friction ? " friction" : "");
       }
   }
 }

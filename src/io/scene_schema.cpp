@@ -51,7 +51,12 @@ void declare_obstacle(ParameterList& list) {
       .add("size", &ObstacleSpec::size, "m", all_of("sizes", positive()), "m, box edge lengths",
            "the box's edge lengths along x, y, z")
       .add("radius", &ObstacleSpec::radius, "m", positive(), "m, sphere", "the sphere's radius")
-      .add("floor", &ObstacleSpec::floor, "", any(), "plane z = 0", "a floor plane at z = 0");
+      .add("floor", &ObstacleSpec::floor, "", any(), "plane z = 0", "a floor plane at z = 0")
+      .add("friction", &ObstacleSpec::friction, "", non_negative(), "Coulomb mu on the box or sphere (0: none)",
+           "Coulomb friction coefficient μ between cloth and the box or sphere (one μ, static and kinetic); "
+           "0 is frictionless")
+      .add("floor_friction", &ObstacleSpec::floor_friction, "", non_negative(), "Coulomb mu on the floor (0: none)",
+           "Coulomb friction coefficient μ between cloth and the floor; 0 is frictionless");
 }
 
 void declare_solver(ParameterList& list) {

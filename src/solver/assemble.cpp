@@ -104,6 +104,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) blk[3 * i + j] += s * kc[i] * kc[j];
     }
+    friction_block(m_.contact, k_z_ + 3 * p, &c_.x1[3 * p], blk);
     columns(p, w, blk);
     const int32_t* at = g.at;
     for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {

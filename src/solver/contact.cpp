@@ -56,6 +56,12 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
   return len - o.radius;
 }
 
+double penalty(const Contact& c, double pen, double* slope) {
+  const double s = 0.5 * c.thickness, k = c.stiffness;
+  *slope = pen < s ? k * pen / s : k;
+  return pen < s ? k * pen * pen / (2 * s) : k * (pen - 0.5 * s);
+}
+
 namespace {
 
 // Adds the penalty of one surface. The force grows quadratically over the
@@ -67,9 +73,8 @@ bool add_surface(const Contact& c, double d, const double* n, const double* hess
                  const double* r, double* jtr, double* slope) {
   const double pen = c.thickness - d;
   if (pen <= 0) return false;
-  const double s = 0.5 * c.thickness, k = c.stiffness;
-  const double f = pen < s ? k * pen * pen / (2 * s) : k * (pen - 0.5 * s);
-  const double df = pen < s ? k * pen / s : k;
+  double df;
+  const double f = penalty(c, pen, &df);
   for (int i = 0; i < 3; ++i) force[i] += f * n[i];
   if (slope) *slope += df;
   if (jtr) {

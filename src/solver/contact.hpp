@@ -18,8 +18,12 @@ struct Obstacle {
 
 struct Contact {
   Obstacle obstacle;
-  double thickness = 1e-3;  // delta, m
-  double stiffness = 1.0;   // k, N/m
+  double thickness = 1e-3;    // delta, m
+  double stiffness = 1.0;     // k, N/m
+  double friction = 0;        // Coulomb mu against the box or sphere
+  double floor_friction = 0;  // Coulomb mu against the floor
+  double slip = 1e-6;         // eps, m: the slip over which friction ramps up to mu N
+  bool has_friction() const { return friction > 0 || floor_friction > 0; }
 };
 
 // Signed distance from x to the shape (negative inside), its gradient n
@@ -32,6 +36,23 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
 // If slope is non-null, adds d|F|/d(penetration) to it. Returns true when in contact.
 bool contact_force(const Contact& c, const double* x, double* force, const double* r = nullptr,
                    double* jac_t_r = nullptr, double* slope = nullptr);
+
+// Lagged Coulomb friction (src/solver/friction.cpp) on a particle at x
+// whose step started at x1. Each surface it touched at x1 lends the normal
+// force N and normal n it had there, both frozen for the step; the slip u is
+// the part of x - x1 across n, and the force -mu N f(|u|) u/|u|, with
+// f(s) = 2s/eps - (s/eps)^2 up to eps and 1 beyond (C1: the Newton residual
+// stays smooth). Adds the force to `force` and, if jac_t_r is non-null,
+// -(dF/dx)^T r to it. Nothing without friction.
+void friction_force(const Contact& c, const double* x, const double* x1, double* force,
+                    const double* r = nullptr, double* jac_t_r = nullptr);
+// Adds -dF/dx (3x3, row-major, symmetric, positive semi-definite) to block;
+// false (nothing added) where no surface holds the particle.
+bool friction_block(const Contact& c, const double* x, const double* x1, double* block);
+// The trace of friction_block's block (0 without one): diagonal estimates.
+double friction_trace(const Contact& c, const double* x, const double* x1);
+// The penalty force of a layer penetrated by pen (> 0) and its slope.
+double penalty(const Contact& c, double pen, double* slope);
 
 // Moves x out to distance `clearance` from every surface it is closer to.
 // Returns true if it moved.

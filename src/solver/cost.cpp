@@ -226,6 +226,7 @@ void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double*
   const double cd = m_.drag / m_.dt;
   double fc[3];
   contact_force(m_.contact, x, fc);
+  friction_force(m_.contact, x, x1, fc);
   double r[3];
   for (int k = 0; k < 3; ++k)
     r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
@@ -313,6 +314,7 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
   if (m_.use_newton) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
+    friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
     const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
@@ -396,6 +398,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * h, fc, &rho_[3 * h], jtr);
+    friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
     gather_listed(row, [&](const double* c) {
       v[0] += c[0];
@@ -428,6 +431,7 @@ void Evaluator::hanging_forces(const double* z) {
     const HangingLink& g = lists_.hanging[i];
     double f[3], fc[3];
     contact_force(m_.contact, z + 3 * g.h, fc);
+    friction_force(m_.contact, z + 3 * g.h, &c_.x1[3 * g.h], fc);
     for (int k = 0; k < 3; ++k) f[k] = hres_[3 * g.h + k] - fc[k];
     gather_listed(hanging_row(i), [&](const double* v) {
       f[0] += v[0];
@@ -529,6 +533,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   for_each_item(lists_.particles, pol_, [&](int64_t p, int64_t pos) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
+    slope += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather_listed(rows_[pos], [&](const double* v) { dsum += v[0]; });
@@ -537,6 +542,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
+    slope += friction_trace(m_.contact, z + 3 * h, &c_.x1[3 * h]) / 3;
     double dsum = slope * slope * inv2;
     gather_listed(row, [&](const double* c) { dsum += c[0]; });
     v[0] = v[1] = v[2] = dsum;

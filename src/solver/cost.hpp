@@ -250,6 +250,11 @@ class Evaluator {
   }
   // A particle's contact numbers into kc (see kKc), at z.
   void contact_kept(int64_t p, const double* z, double* kc) const;
+  // Friction's block (contact.hpp) times v_p into out: computed, not kept
+  // (x1 and z give it); assemble_stiffness reads it at k_z_, the z of the
+  // last stiffness_diagonal.
+  void add_friction_product(int64_t p, const double* z, const double* vp, double* out) const;
+  const double* k_z_ = nullptr;
   // The element buffers (and stiffness_product's z-only numbers) are in
   // list order: an element's at its position in its list (the ring's after
   // this rank's), so on a coarse AMRC mesh, whose slots lie far apart, an

@@ -169,7 +169,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
         }, sums);
     }
     ++it;
-    if (sums[0] <= target) break;
+    if (sums[0] <= target || it == budget) break;  // no V-cycle for a direction never taken
     if (mg) {
       {
         ScopedPhase ph(tm, kPrecondition);

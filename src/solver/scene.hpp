@@ -44,6 +44,8 @@ struct ObstacleSpec {
   std::array<double, 3> size{0.4, 0.4, 0.4};    // m, box edge lengths
   double radius = 0.2;                          // m, sphere
   bool floor = true;                            // plane z = 0
+  double friction = 0;                          // Coulomb mu, cloth on the box or sphere
+  double floor_friction = 0;                    // Coulomb mu, cloth on the floor
 };
 
 struct SolverSpec {

@@ -59,6 +59,8 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   o.radius = os.radius;
   o.floor = os.floor;
   o.floor_z = 0.0;
+  m.contact.friction = os.friction;
+  m.contact.floor_friction = os.floor_friction;
   set_contact_layer(m.contact, scene, fabric, hi, hj, g);
   m.dt = m.dt_prev = scene.solver.dt;
   m.memory = scene.solver.memory;

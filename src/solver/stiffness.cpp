@@ -120,6 +120,13 @@ void Evaluator::contact_kept(int64_t p, const double* z, double* kc) const {
   kc[5] = c_.mass[p] * m_.inertia_coeff();
 }
 
+// Adds particle p's friction block times v_p to out (nothing without friction).
+void Evaluator::add_friction_product(int64_t p, const double* z, const double* vp, double* out) const {
+  double blk[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  if (!friction_block(m_.contact, z + 3 * p, &c_.x1[3 * p], blk)) return;
+  for (int i = 0; i < 3; ++i) out[i] += blk[3 * i] * vp[0] + blk[3 * i + 1] * vp[1] + blk[3 * i + 2] * vp[2];
+}
+
 void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   list_rows();
   halo_.exchange(v, Halo::kPositions);
@@ -195,6 +202,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
     }
+    add_friction_product(p, z, vp, out);
     gather_listed(rows_[pos], [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
@@ -210,6 +218,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     const double* vh = v + 3 * h;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
     for (int k = 0; k < 3; ++k) out[k] = fn > 0 ? slope * nv * fc[k] / fn : 0.0;
+    add_friction_product(h, z, vh, out);
     gather_listed(row, [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
@@ -262,6 +271,7 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // but itself.
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   list_rows();
+  k_z_ = z;
   const bool settled = settled_;
   auto edge = [&](int64_t s, int64_t pos) {
     double mine[kKgEdge];
@@ -293,6 +303,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     double mine[kKc];
     const double* kc = contact_at(p, size_t(pos), mine);
     double dsum = kc[5] + kc[4] / 3;
+    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
     gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   };
@@ -301,6 +312,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     double mine[kKc];
     const double* kc = contact_at(h, size_t(&row - rows_.data()), mine);
     double dsum = kc[4] / 3;
+    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * h, &c_.x1[3 * h]) / 3;
     gather_listed(row, [&](const double* c) { dsum += c[0]; });
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);
