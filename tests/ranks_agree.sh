@@ -21,10 +21,10 @@ sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
 zz() { python3 -c 'import json,sys; z=json.load(open(sys.argv[1]))["zigzag"]; print(z["pairs"], z["zigzags"])' "$1/report.json"; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
 # A cloth let down onto the floor just inside the coarse mesh's contact layer
-# (half its 62.5 mm spacing): at rest on that mesh after a few steps, then
-# split (the drape over the box would take thousands of steps to rest).
+# (half its cell diagonal, 44.2 mm): at rest on that mesh after a few steps,
+# then split (the drape over the box would take thousands of steps to rest).
 sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
-          --set 'obstacle.shape="none"' --set cloth.height=0.031)
+          --set 'obstacle.shape="none"' --set cloth.height=0.044)
 edges=(--set 'amrc.indicator="deflection"' --set amrc.refine=0.5 --set amrc.coarsen=0.1
        --set amrc.start_spacing=0.05 --set solver.steps=120 --set output.every=40)
 for method in $cases; do

@@ -722,9 +722,9 @@ TEST(Cli, PenetrationOnTheWrittenSurface) {
   }
   EXPECT_EQ(written[0], solved[0]);
   EXPECT_GE(written[1], solved[1]);
-  // The coarse mesh's contact layer is half its own spacing, so the surface
-  // filled in between its particles clears the box top's edges too (with
-  // half the finest spacing it cut them by about a millimetre).
+  // The coarse mesh's contact layer is half its own cell diagonal, so the
+  // surface filled in between its particles clears the box top's edges too
+  // (with half the finest spacing it cut them by about a millimetre).
   EXPECT_EQ(written[1], 0.0);
 }
 

@@ -132,7 +132,7 @@ void stage_physics(Model& m, const Scene& scene, const Fabric& fabric, const Gri
   m.drag = sequencing ? std::max(scene.solver.drag, scene.amrc.stage_drag) : scene.solver.drag;
   m.force_scale = finest_force_scale * std::ldexp(1.0, 2 * level);
   set_contact_layer(m.contact, scene, fabric, std::ldexp(grid.hi, level), std::ldexp(grid.hj, level),
-                    std::fabs(m.gravity[2]));
+                    std::fabs(m.gravity[2]), level > 0);
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ void declare_solver(ParameterList& list) {
            "> 0 ends the run once every particle is slower for 3 steps (and at least 2·rest_speed/g of "
            "time); 0: never at rest")
       .add("contact_thickness", &SolverSpec::contact_thickness, "m", non_negative().with_note("0: automatic"),
-           "m; 0 = automatic", "the contact layer; 0: half the spacing of the mesh solved, or half the fabric's thickness if larger")
+           "m; 0 = automatic", "the contact layer; 0: half the grid spacing (a coarse mesh of grid sequencing: half its cell diagonal), or half the fabric's thickness if larger")
       .add("memory", &SolverSpec::memory, "", non_negative(), "weight of the force memory (hysteresis) term",
            "weight of the memory term that pulls each force to its hysteresis target")
       .add("drag", &SolverSpec::drag, "1/s", non_negative(), "1/s: air drag, a force -drag*m*v on each particle",

@@ -35,8 +35,10 @@ struct Scene;
 // Builds the model of a scene and fabric for a grid of spacing h.
 Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj);
 // The contact layer (thickness and stiffness) of a mesh with spacings hi, hj
-// under gravity g (m/s^2).
-void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, double hi, double hj, double g);
+// under gravity g (m/s^2); `filled`: a coarse mesh whose finer particles are
+// filled in between its own when written.
+void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, double hi, double hj, double g,
+                       bool filled);
 
 // A flat cloth at rest at the scene's height, on the finest mesh, every
 // particle active, nothing clamped. Allocates every array once.

@@ -17,15 +17,15 @@ double Cloth::total_mass() const {
 // Contact acts within delta of a surface (half the mesh spacing, or half the
 // thickness if larger); a push of delta balances 10^4 weights of the mesh's
 // particles, so they settle well within delta and never reach the surface.
-// The layer follows the mesh solved: the chord between two particles on
-// either side of a right-angled edge clears it only if the layer is about
-// half their distance, so on a coarse mesh a finest-spacing layer lets the
-// surface written between them cut the edge.
-void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, double hi, double hj, double g) {
+// A coarse mesh (filled = true) stands for the finest one written between its
+// particles: the bilinear patch of a cell over an obstacle's corner clears it
+// only if the layer is about half the cell's diagonal, so that is its layer.
+void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, double hi, double hj, double g,
+                       bool filled) {
   const double weight = fabric.density * hi * hj * g;
-  const double delta = scene.solver.contact_thickness > 0
-                           ? scene.solver.contact_thickness
-                           : std::max(0.5 * std::min(hi, hj), 0.5 * fabric.thickness);
+  const double reach = filled ? std::hypot(hi, hj) : std::min(hi, hj);
+  const double delta = scene.solver.contact_thickness > 0 ? scene.solver.contact_thickness
+                                                          : std::max(0.5 * reach, 0.5 * fabric.thickness);
   c.thickness = delta;
   c.stiffness = 1e4 * weight / delta;
 }
@@ -61,7 +61,7 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   o.floor_z = 0.0;
   m.contact.friction = os.friction;
   m.contact.floor_friction = os.floor_friction;
-  set_contact_layer(m.contact, scene, fabric, hi, hj, g);
+  set_contact_layer(m.contact, scene, fabric, hi, hj, g, false);
   m.dt = m.dt_prev = scene.solver.dt;
   m.memory = scene.solver.memory;
   m.drag = scene.solver.drag;
