@@ -6,7 +6,7 @@
 // stiffness product timed in the same run, so that the choice between the
 // two is measured on this machine. One rank (hypre's IJ interface on
 // MPI_COMM_WORLD), one thread (Debian's hypre is built without OpenMP).
-// Figures at 129, 257 and 513: docs/performance.md (raw output in docs/data/hypre-compare/).
+// Figures: docs/performance.md (raw output in docs/data/hypre-compare/).
 //   hypre_compare [--size 129] [--time 0.12] [--dt 5e-4] [--tol 1e-6] [--max-iterations 1000]
 //                 [--repeat 1] [--only NAME-PART] [--json FILE]
 #include <mpi.h>
