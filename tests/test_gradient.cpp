@@ -339,7 +339,9 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
   for (bool amrc : {false, true})
   for (bool friction : {false, true}) {
     World w = random_world(11, amrc);
-    if (friction) ASSERT_GT(with_friction(w), 0);
+    if (friction) {
+      ASSERT_GT(with_friction(w), 0);
+    }
     Evaluator& ev = w.loop->evaluator();
     ev.hysteresis_forces(w.cloth.z.data());
     ev.evaluate(w.cloth.z.data(), nullptr);
@@ -385,7 +387,9 @@ TEST(Stiffness, AssembledMatchesTheProduct) {
   for (bool amrc : {false, true})
   for (bool friction : {false, true}) {
     World w = random_world(13, amrc);
-    if (friction) ASSERT_GT(with_friction(w), 0);
+    if (friction) {
+      ASSERT_GT(with_friction(w), 0);
+    }
     Evaluator& ev = w.loop->evaluator();
     ev.settled_cost(w.cloth.z.data());
     const size_t n = w.cloth.z.size();

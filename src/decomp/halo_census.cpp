@@ -20,18 +20,6 @@ bool surrounded_by_own(const Tiling& tl, const std::vector<int>& owner, int t) {
   return true;
 }
 
-// Distinct owners of the tiles the clipped (2w+1)^2 window around (i, j) overlaps.
-void window_ranks(const Tiling& tl, const std::vector<int>& owner, int i, int j, int w, std::vector<int>& out) {
-  out.clear();
-  const int i0 = std::max(0, i - w), i1 = std::min(tl.ni - 1, i + w);
-  const int j0 = std::max(0, j - w), j1 = std::min(tl.nj - 1, j + w);
-  for (int ti = i0 / tl.t; ti <= i1 / tl.t; ++ti)
-    for (int tj = j0 / tl.t; tj <= j1 / tl.t; ++tj) {
-      const int r = owner[ti * tl.ntj + tj];
-      if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
-    }
-}
-
 }  // namespace
 
 HaloCensus halo_census(const Tiling& tl, const std::vector<int>& owner, int parts, int width) {
@@ -48,7 +36,7 @@ HaloCensus halo_census(const Tiling& tl, const std::vector<int>& owner, int part
     met.clear();
     for (int i = r.i0; i < r.i1; ++i)
       for (int j = r.j0; j < r.j1; ++j) {
-        window_ranks(tl, owner, i, j, width, near);
+        window_owners(tl, owner, i, j, width, near);
         for (int q : near) {
           if (q == o) continue;
           ++h.sent[o];

@@ -5,24 +5,6 @@
 
 namespace drape {
 
-namespace {
-
-// Distinct owners of the particles in the (2w+1)^2 window around (i, j).
-void window_owners(const Tiling& tl, const std::vector<int>& owner, int i, int j, int w,
-                   std::vector<int>& out) {
-  out.clear();
-  const int i0 = std::max(0, i - w), i1 = std::min(tl.ni - 1, i + w);
-  const int j0 = std::max(0, j - w), j1 = std::min(tl.nj - 1, j + w);
-  // Tiles are rectangles: visiting the tiles the window overlaps suffices.
-  for (int ti = i0 / tl.t; ti <= i1 / tl.t; ++ti)
-    for (int tj = j0 / tl.t; tj <= j1 / tl.t; ++tj) {
-      const int r = owner[ti * tl.ntj + tj];
-      if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
-    }
-}
-
-}  // namespace
-
 HaloExchange::HaloExchange(const Tiling& tl, const std::vector<int>& owner, MPI_Comm comm, int width,
                            int ring_width)
     : tiling_(tl), comm_(comm), width_(width), ring_width_(ring_width), n_(int64_t(tl.ni) * tl.nj) {

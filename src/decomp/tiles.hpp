@@ -5,6 +5,7 @@
 // the physics can order its reductions by tile.
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 namespace drape {
 
@@ -28,5 +29,20 @@ struct Tiling {
     return {ti * t, std::min(ni, (ti + 1) * t), tj * t, std::min(nj, (tj + 1) * t)};
   }
 };
+
+// Distinct owners (owner: rank per tile) of the particles in the clipped
+// (2w+1)^2 window around (i, j), in order of first meeting. Tiles are
+// rectangles: visiting the tiles the window overlaps suffices.
+inline void window_owners(const Tiling& tl, const std::vector<int>& owner, int i, int j, int w,
+                          std::vector<int>& out) {
+  out.clear();
+  const int i0 = std::max(0, i - w), i1 = std::min(tl.ni - 1, i + w);
+  const int j0 = std::max(0, j - w), j1 = std::min(tl.nj - 1, j + w);
+  for (int ti = i0 / tl.t; ti <= i1 / tl.t; ++ti)
+    for (int tj = j0 / tl.t; tj <= j1 / tl.t; ++tj) {
+      const int r = owner[ti * tl.ntj + tj];
+      if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
+    }
+}
 
 }  // namespace drape
