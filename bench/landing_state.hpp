@@ -6,7 +6,7 @@
 #include <time.h>
 
 #include "io/kes.hpp"
-#include "solver/world.hpp"
+#include "app/world.hpp"
 
 namespace drape {
 

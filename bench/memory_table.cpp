@@ -12,7 +12,7 @@
 
 #include "amrc/amrc.hpp"
 #include "io/kes.hpp"
-#include "solver/world.hpp"
+#include "app/world.hpp"
 
 int main(int argc, char** argv) {
   using namespace drape;

@@ -33,7 +33,7 @@
 #include "io/config.hpp"
 #include "io/json.hpp"
 #include "io/kes.hpp"
-#include "solver/world.hpp"
+#include "app/world.hpp"
 
 namespace drape {
 namespace {

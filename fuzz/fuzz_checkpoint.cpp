@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "io/checkpoint.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 
 namespace {
 

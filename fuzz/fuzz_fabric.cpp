@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "fuzz/split.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/kes.hpp"
 
 namespace {

@@ -6,7 +6,7 @@
 
 #include "fuzz/split.hpp"
 #include "io/config.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const drape::fuzz::Parts parts = drape::fuzz::split_at_marker(data, size, "%%");

@@ -1,24 +1,34 @@
 #!/usr/bin/env bash
-# The layers' include rules (docs/development.md): the physics (src/solver,
-# src/amrc) never includes mpi.h, a decomp header other than the MPI-free
-# tiles.hpp, io beyond its error types, or app; MPI appears only in
-# src/decomp, src/app and io's parallel-HDF5 writers. Until each layer is a
-# CMake target of its own with PRIVATE dependencies, this check is what
-# fails an include that runs back up.
+# The layers' include rules (docs/development.md): each folder of src/ may
+# include its own headers and those of the layers below it, never one above:
+#   base -> mesh -> solver -> amrc -> decomp -> io -> app
+# and mpi.h appears only in decomp, app and io's parallel-HDF5 writers. Each
+# layer is a library linking only the ones below; since all headers share
+# one include root, this check is what fails an include that runs back up.
 # Usage: layers.sh SRC_DIR
 set -euo pipefail
 src=$1
+order=(base mesh solver amrc decomp io app)
 fail=0
 bad() { echo "layers: $1"; fail=1; }
-while IFS= read -r line; do
-  bad "physics includes MPI, decomp or app: $line"
-done < <(grep -rnE '#include (<mpi\.h>|"decomp/|"app/)' "$src/solver" "$src/amrc" | grep -v '"decomp/tiles.hpp"' || true)
-while IFS= read -r line; do
-  bad "physics includes io beyond its errors: $line"
-done < <(grep -rnE '#include "io/' "$src/solver" "$src/amrc" | grep -v '"io/error.hpp"' || true)
+for ((k = 0; k < ${#order[@]}; ++k)); do
+  layer=${order[k]}
+  [[ -d $src/$layer ]] || { bad "no folder $src/$layer"; continue; }
+  above=("${order[@]:k+1}")
+  ((${#above[@]})) || continue
+  pattern="#include \"($(IFS='|'; echo "${above[*]}"))/"
+  while IFS= read -r line; do
+    bad "$layer includes a layer above it: $line"
+  done < <(grep -rnE "$pattern" "$src/$layer" || true)
+done
 while IFS= read -r line; do
   bad "mpi.h outside decomp, app and io's parallel writers: $line"
 done < <(grep -rln '#include <mpi.h>' "$src" | grep -vE "^$src/(decomp|app)/" |
          grep -vE "^$src/io/(output|checkpoint|agreed_write)\.hpp$|^$src/io/(hdf5_output|checkpoint|h5)\.cpp$" || true)
-((fail == 0)) && echo "ok: solver and amrc free of MPI, decomp (but tiles), io (but errors) and app; mpi.h only in decomp, app and io's writers"
+# Every folder of src/ is a layer.
+for d in "$src"/*/; do
+  d=$(basename "$d")
+  [[ " ${order[*]} " == *" $d "* ]] || bad "folder $d is in no layer"
+done
+chain=$(printf " -> %s" "${order[@]}"); ((fail == 0)) && echo "ok: ${chain:4}: no include runs back up; mpi.h only in decomp, app and io's writers"
 exit $fail

@@ -11,9 +11,9 @@
 
 #include "amrc/amrc.hpp"
 #include "amrc/criterion.hpp"
-#include "amrc/quadtree.hpp"
+#include "mesh/quadtree.hpp"
 #include "amrc/sequence.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 #include "world.hpp"
 
 namespace drape::test {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "io/config.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "solver/scene.hpp"
 
 namespace fs = std::filesystem;

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/kes.hpp"
 #include "solver/band.hpp"
 

@@ -10,7 +10,7 @@
 
 #include "decomp/collective.hpp"
 #include "decomp/decomposition.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 
 namespace drape::test {
 namespace {

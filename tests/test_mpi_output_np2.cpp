@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "io/output.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace fs = std::filesystem;
 using namespace drape;

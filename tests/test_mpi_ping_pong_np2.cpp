@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
+
 #include "decomp/ping_pong.hpp"
 
 namespace drape::test {
@@ -14,8 +16,9 @@ TEST(PingPong, LatencyAndBandwidthArePositive) {
   EXPECT_EQ(p.bytes.back(), 1 << 20);
   EXPECT_GT(p.alpha, 0);
   EXPECT_GT(p.beta, 0);
-  // A megabyte takes longer than 8 bytes, and at least its bytes at beta.
-  EXPECT_GT(p.seconds.back(), p.seconds.front());
+  // A megabyte takes longer than the fastest of the smallest messages (any
+  // one of which a busy machine may deschedule), and at least its bytes at beta.
+  EXPECT_GT(p.seconds.back(), *std::min_element(p.seconds.begin(), p.seconds.begin() + 4));
   EXPECT_LT(double(1 << 20) / p.beta, 10 * p.seconds.back());
 }
 

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/output.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace fs = std::filesystem;
 using namespace drape;

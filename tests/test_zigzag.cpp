@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "amrc/quadtree.hpp"
+#include "mesh/quadtree.hpp"
 #include "solver/zigzag.hpp"
 #include "world.hpp"
 

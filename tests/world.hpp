@@ -4,7 +4,7 @@
 #include <random>
 
 #include "amrc/criterion.hpp"
-#include "solver/world.hpp"
+#include "app/world.hpp"
 
 namespace drape::test {
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "amrc/criterion.hpp"
-#include "amrc/quadtree.hpp"
-#include "decomp/tiles.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/quadtree.hpp"
+#include "mesh/tiles.hpp"
+#include "mesh/cloth.hpp"
 #include "solver/contact.hpp"
 #include "solver/memory_table.hpp"
 #include "solver/reducer.hpp"

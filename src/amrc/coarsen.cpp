@@ -1,5 +1,5 @@
 // Coarsening: the children of a cell merge back into it.
-#include "amrc/quadtree.hpp"
+#include "mesh/quadtree.hpp"
 
 namespace drape {
 

@@ -4,7 +4,7 @@
 // does not flip back and forth.
 #include <vector>
 
-#include "amrc/quadtree.hpp"
+#include "mesh/quadtree.hpp"
 
 namespace drape {
 

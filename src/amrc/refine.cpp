@@ -1,5 +1,5 @@
 // Refinement: a leaf splits into its (up to four, clipped) children.
-#include "amrc/quadtree.hpp"
+#include "mesh/quadtree.hpp"
 
 namespace drape {
 

@@ -1,4 +1,5 @@
 #include "amrc/remesh.hpp"
+#include "mesh/topology.hpp"
 
 namespace drape {
 

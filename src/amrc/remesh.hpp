@@ -4,8 +4,8 @@
 // is the finest mesh's), and the hanging particles' links for the solver.
 #include <vector>
 
-#include "amrc/active_lists.hpp"
-#include "amrc/quadtree.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/quadtree.hpp"
 
 namespace drape {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "amrc/active_lists.hpp"
+#include "mesh/active_lists.hpp"
 
 namespace drape {
 

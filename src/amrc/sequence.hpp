@@ -7,7 +7,7 @@
 // left (solver.wall_limit) would not cover the next finer mesh. A coarse mesh crosses the long,
 // slow part of the drape (the fall, the swing of the sides) at a coarse
 // mesh's price; each finer one only has to settle what it resolves anew.
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 

@@ -15,7 +15,7 @@
 #include "decomp/collective.hpp"
 #include "io/checkpoint.hpp"
 #include "io/config.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/kes.hpp"
 
 namespace {

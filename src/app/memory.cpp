@@ -10,7 +10,7 @@
 #include <string>
 
 #include "decomp/collective.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 
 namespace drape {
 

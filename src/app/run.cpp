@@ -15,7 +15,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "amrc/active_lists.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/topology.hpp"
 #include "amrc/amrc.hpp"
 #include "amrc/remesh.hpp"
 #include "amrc/sequence.hpp"
@@ -28,7 +29,7 @@
 #include "app/report.hpp"
 #include "app/signals.hpp"
 #include "io/atomic_file.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/json.hpp"
 #include "io/output.hpp"
 #include "solver/checksum.hpp"

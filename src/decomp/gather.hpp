@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "decomp/tiles.hpp"
+#include "mesh/tiles.hpp"
 
 namespace drape {
 

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "decomp/tiles.hpp"
+#include "mesh/tiles.hpp"
 
 namespace drape {
 

@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "decomp/tiles.hpp"
+#include "mesh/tiles.hpp"
 #include "solver/halo.hpp"
 
 namespace drape {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "io/error.hpp"
+#include "base/error.hpp"
 
 namespace drape {
 

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "decomp/tiles.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/tiles.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 

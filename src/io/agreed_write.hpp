@@ -13,7 +13,7 @@
 #include <string>
 
 #include "decomp/collective.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 
 namespace drape {
 

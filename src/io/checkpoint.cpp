@@ -16,7 +16,7 @@
 
 #include "decomp/collective.hpp"
 #include "io/agreed_write.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/h5.hpp"
 #include "io/reserve.hpp"
 #include "io/version.hpp"

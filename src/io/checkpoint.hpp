@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "io/frame.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 #include "solver/fabric.hpp"
 
 namespace drape {

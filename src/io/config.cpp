@@ -23,11 +23,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/scene_schema.hpp"
 #include "io/text.hpp"
 #include "io/toml_text.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 namespace {

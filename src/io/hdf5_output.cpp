@@ -42,12 +42,12 @@
 #include "decomp/collective.hpp"
 #include "io/agreed_write.hpp"
 #include "io/atomic_file.hpp"
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/h5.hpp"
 #include "io/reserve.hpp"
 #include "io/version.hpp"
 #include "io/output.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 

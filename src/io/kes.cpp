@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "io/text.hpp"
 #include "solver/band.hpp"
 

@@ -17,7 +17,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/output.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 namespace {

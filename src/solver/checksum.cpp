@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "decomp/tiles.hpp"
+#include "mesh/tiles.hpp"
 
 namespace drape {
 

@@ -8,8 +8,8 @@
 #include <cstring>
 #include <string>
 
-#include "solver/cloth.hpp"
-#include "decomp/tiles.hpp"
+#include "mesh/cloth.hpp"
+#include "mesh/tiles.hpp"
 #include "solver/reducer.hpp"
 
 namespace drape {

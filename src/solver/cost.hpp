@@ -16,8 +16,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "amrc/active_lists.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/cloth.hpp"
 #include "solver/halo.hpp"
 #include "solver/loops.hpp"
 #include "solver/memory_table.hpp"

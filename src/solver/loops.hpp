@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "amrc/active_lists.hpp"
+#include "mesh/active_lists.hpp"
 #include "solver/scene.hpp"
 
 namespace drape {

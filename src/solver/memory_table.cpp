@@ -1,7 +1,7 @@
 #include "solver/memory_table.hpp"
 
-#include "amrc/active_lists.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 

@@ -3,7 +3,7 @@
 // direction, gravity, contact, the time step, and the scales that make the
 // cost terms comparable (docs/design.md §1, §6).
 #include "solver/band.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 #include "solver/contact.hpp"
 #include "solver/fabric.hpp"
 #include "solver/scene.hpp"

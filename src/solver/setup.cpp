@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "amrc/active_lists.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/topology.hpp"
 #include "solver/model.hpp"
 
 namespace drape {

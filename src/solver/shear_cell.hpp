@@ -3,7 +3,7 @@
 // the kernel shear_cell (kernels.hpp) takes them.
 #include <cstdint>
 
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 #include "solver/kernels.hpp"
 
 namespace drape {

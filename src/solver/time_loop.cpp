@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "io/error.hpp"
+#include "base/error.hpp"
 #include "solver/kernels.hpp"
 #include "solver/loops.hpp"
 

@@ -8,8 +8,8 @@
 // pass that reads them, its neighbours' being in cache by then.
 #include <cstdint>
 
-#include "amrc/active_lists.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 #include "solver/reducer.hpp"
 
 namespace drape {

@@ -7,12 +7,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "decomp/tiles.hpp"
-#include "solver/cloth.hpp"
+#include "mesh/tiles.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
-
-class Quadtree;
 
 // How a list is split among the threads: one chunk each, then a shared
 // tail. The paper cuts equal counts. On an uneven mesh equal counts are not
@@ -92,17 +90,4 @@ struct ActiveLists {
 void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned_tiles,
                         ActiveLists& out, const std::vector<int64_t>& ring = {});
 
-// Rebuilds next/prev neighbour tables and element switches from particle
-// flags: an edge joins consecutive active particles on a grid line, a triple
-// sits at an active particle with active neighbours on both sides, a shear
-// corner at an active particle with both a warp and a weft neighbour.
-// With a quadtree, only along leaf sides (never across a coarse leaf).
-void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree = nullptr);
-
-}  // namespace drape
-
-namespace drape {
-// Rest lengths, widths, areas and particle masses (density * represented
-// area) from the neighbour tables; the total mass is the finest mesh's.
-void rebuild_geometry(Cloth& c, double density);
 }  // namespace drape

@@ -6,7 +6,8 @@
 #include <optional>
 #include <vector>
 
-#include "amrc/active_lists.hpp"
+#include "mesh/active_lists.hpp"
+#include "mesh/topology.hpp"
 #include "amrc/remesh.hpp"
 #include "solver/model.hpp"
 #include "solver/time_loop.hpp"

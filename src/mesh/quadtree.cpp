@@ -1,12 +1,12 @@
 // The quadtree's structure, its balance, and what it implies for particles:
 // active and hanging marks, levels, masses. See quadtree.hpp.
-#include "amrc/quadtree.hpp"
+#include "mesh/quadtree.hpp"
 
 #include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
 
-#include "solver/cloth.hpp"
+#include "mesh/cloth.hpp"
 
 namespace drape {
 

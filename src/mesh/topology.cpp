@@ -1,0 +1,120 @@
+#include "mesh/topology.hpp"
+
+#include <cmath>
+
+#include "mesh/quadtree.hpp"
+
+namespace drape {
+
+namespace {
+// Shear cells: the leaves, each on the slot of its lower corner. Without a
+// tree, the finest cells whose four sides are mesh edges.
+void rebuild_cells(Cloth& c, bool shear_enabled, const Quadtree* tree) {
+  const Grid& g = c.grid;
+  for (int k = 0; k < 3; ++k) {
+    c.cell[k].assign(g.n(), -1);  // same sizes during a run: no allocation
+    c.corner_of[k].assign(g.n(), -1);
+  }
+  c.shear_on.assign(g.n(), 0);
+  if (!shear_enabled) return;
+  auto put = [&](int64_t s, int64_t a, int64_t b, int64_t d) {
+    c.shear_on[s] = 1;
+    const int64_t corner[3] = {a, b, d};
+    for (int k = 0; k < 3; ++k) {
+      c.cell[k][s] = corner[k];
+      c.corner_of[k][corner[k]] = s;
+    }
+  };
+  if (tree) {
+    tree->for_each_leaf([&](const Cell& l) {
+      const int ie = tree->i_end(l), je = tree->j_end(l);
+      put(g.id(l.i, l.j), g.id(ie, l.j), g.id(l.i, je), g.id(ie, je));
+    });
+    return;
+  }
+  for (int64_t s = 0; s < g.n(); ++s) {
+    const int64_t a = c.next[0][s], b = c.next[1][s];
+    if (!c.active(s) || a != s + g.nj || b != s + 1) continue;
+    if (c.next[1][a] == a + 1 && c.next[0][b] == b + g.nj) put(s, a, b, a + 1);
+  }
+}
+}  // namespace
+
+void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
+  const Grid& g = c.grid;
+  for (int d = 0; d < 2; ++d) {
+    c.next[d].assign(g.n(), -1);
+    c.prev[d].assign(g.n(), -1);
+  }
+  // Walk each grid line linking consecutive active particles.
+  for (int i = 0; i < g.ni; ++i) {
+    int64_t last = -1;
+    for (int j = 0; j < g.nj; ++j) {
+      const int64_t p = g.id(i, j);
+      if (!c.active(p)) continue;
+      if (last >= 0 && (!tree || tree->on_side(last, p))) {
+        c.next[1][last] = p;
+        c.prev[1][p] = last;
+      }
+      last = p;
+    }
+  }
+  for (int j = 0; j < g.nj; ++j) {
+    int64_t last = -1;
+    for (int i = 0; i < g.ni; ++i) {
+      const int64_t p = g.id(i, j);
+      if (!c.active(p)) continue;
+      if (last >= 0 && (!tree || tree->on_side(last, p))) {
+        c.next[0][last] = p;
+        c.prev[0][p] = last;
+      }
+      last = p;
+    }
+  }
+  for (int64_t p = 0; p < g.n(); ++p) {
+    const bool on = c.active(p);
+    for (int d = 0; d < 2; ++d) {
+      c.edge_on[2 * p + d] = on && c.next[d][p] >= 0;
+      c.triple_on[2 * p + d] = on && c.next[d][p] >= 0 && c.prev[d][p] >= 0;
+    }
+  }
+  rebuild_cells(c, shear_enabled, tree);
+}
+
+
+namespace {
+// Half the rest distance to each active neighbour along d: the extent of cloth a particle stands for.
+double extent(const Cloth& c, int64_t p, int d) {
+  const int64_t st = c.grid.stride(d);
+  double e = 0;
+  if (c.next[d][p] >= 0) e += 0.5 * double(c.next[d][p] - p) / st;
+  if (c.prev[d][p] >= 0) e += 0.5 * double(p - c.prev[d][p]) / st;
+  return e * c.grid.h(d);
+}
+}  // namespace
+
+void rebuild_geometry(Cloth& c, double density) {
+  const Grid& g = c.grid;
+  const int64_t n = g.n();
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p < n; ++p) {
+    const double ext[2] = {c.active(p) ? extent(c, p, 0) : 0, c.active(p) ? extent(c, p, 1) : 0};
+    c.mass[p] = density * ext[0] * ext[1];
+    double len[2] = {0, 0};
+    for (int d = 0; d < 2; ++d) {
+      const int64_t s = 2 * p + d;
+      if (c.next[d][p] >= 0) len[d] = double(c.next[d][p] - p) / g.stride(d) * g.h(d);
+      c.edge_rest[s] = c.edge_on[s] ? len[d] : 0;
+      c.edge_width[s] =
+          c.edge_on[s] ? 0.5 * (ext[1 - d] + extent(c, c.next[d][p], 1 - d)) : 0;
+      c.triple_rest[s] = c.triple_on[s] ? ext[d] : 0;
+      c.triple_width[s] = c.triple_on[s] ? ext[1 - d] : 0;
+    }
+    // A cell stands for its own area.
+    const double area = c.shear_on[p] ? double(c.cell[0][p] - p) / g.nj * g.hi * double(c.cell[1][p] - p) * g.hj : 0;
+    c.shear_area[p] = area;
+    c.shear_rest[p] = std::sqrt(area);
+  }
+}
+
+}  // namespace drape
