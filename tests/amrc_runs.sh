@@ -12,16 +12,15 @@ rm -rf "$work" && mkdir -p "$work"
 scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[33,33]" --set cloth.tile=8
        --set solver.steps=60 --set output.every=10 --set output.picture=false --quiet
        --set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2)
-sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
-field() { grep -o "\"$2\": [^,]*" "$1/report.json" | head -1 | cut -d' ' -f2; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 "$drape" "${scene[@]}" --threads 1 --output "$work/ref"
 ref=$(sum "$work/ref")
-min=$(grep -A3 '"particles_active"' "$work/ref/report.json" | grep -o '"min": [0-9]*' | cut -d' ' -f2)
-max=$(grep -A3 '"particles_active"' "$work/ref/report.json" | grep -o '"max": [0-9]*' | cut -d' ' -f2)
+min=$(report "$work/ref" 'r["particles_active"]["min"]')
+max=$(report "$work/ref" 'r["particles_active"]["max"]')
 (( min < max )) || { echo "FAIL: the mesh never changed (active particles $min..$max)"; exit 1; }
 echo "ok active particles $min..$max of 1089"
-mean=$(field "$work/ref" mean)
+mean=$(report "$work/ref" 'r["particles_active"]["mean"]')
 python3 -c "import sys; sys.exit(not ($min < $mean < $max))" ||
   { echo "FAIL: the iteration-weighted mean $mean is not strictly inside $min..$max"; exit 1; }
 echo "ok mean active particles per CG iteration $mean"
@@ -45,8 +44,9 @@ echo "ok same checksum for 1-3 threads x 4 schedules: $ref"
 "$drape" "${scene[@]}" --set solver.steps=31 --set output.checkpoint_every=31 --threads 2 --output "$work/part"
 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=60 --threads 1 --quiet
 [[ $(sum "$work/part") == "$ref" ]] || { echo "FAIL: restart with AMRC: $(sum "$work/part") vs $ref"; exit 1; }
-[[ $(field "$work/part" mean) == "$mean" ]] ||
-  { echo "FAIL: the mean active particles after a restart: $(field "$work/part" mean) vs $mean"; exit 1; }
+part_mean=$(report "$work/part" 'r["particles_active"]["mean"]')
+[[ $part_mean == "$mean" ]] ||
+  { echo "FAIL: the mean active particles after a restart: $part_mean vs $mean"; exit 1; }
 h5diff "$work/ref/drape.h5" "$work/part/drape.h5" /frames /frames || { echo "FAIL: frames differ after restart"; exit 1; }
 echo "ok stopped at 31, restarted: the same state and frames"
 

@@ -14,7 +14,7 @@ rm -rf "$work" && mkdir -p "$work"
 scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[17,17]" --set output.picture=false
        --quiet)
 steps=24
-sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 no_tmp() { ! ls "$1"/*.tmp >/dev/null 2>&1 || { echo "FAIL $2: temporary files left in $1"; ls "$1"; exit 1; }; }
 at_step() { "$drape" --restart "$1/checkpoint.h5" --dry-run | sed -n 's/.* at step \([0-9]*\)$/\1/p'; }
 # Open MPI's shared memory (PMIx's store, the ranks' own) lives in files that

@@ -11,6 +11,7 @@
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[25,25]" --set output.every=5
        --set output.picture=false --quiet)
 no_tmp() { ! ls "$1"/*.tmp >/dev/null 2>&1 || { echo "FAIL: temporary files left in $1"; ls "$1"; exit 1; }; }
@@ -36,7 +37,7 @@ echo "ok mpiexec ended $((SECONDS - start)) s after kill -9, status $status"
 step=$("$drape" --restart "$work/kill/checkpoint.h5" --dry-run | sed -n 's/.* at step \([0-9]*\)$/\1/p')
 OMP_NUM_THREADS=1 "$drape" --restart "$work/kill/checkpoint.h5" --set solver.steps=$((step + 3)) \
   --output "$work/kill-continued" --quiet
-grep -q "\"steps\": $((step + 3))," "$work/kill-continued/report.json" || { echo "FAIL: restart after kill -9"; exit 1; }
+[[ $(field "$work/kill-continued" steps) == $((step + 3)) ]] || { echo "FAIL: restart after kill -9"; exit 1; }
 echo "ok the checkpoint of step $step restarts"
 
 # NaN at step 12 with checkpoints every 5 steps.

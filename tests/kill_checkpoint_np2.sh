@@ -13,7 +13,7 @@ rm -rf "$work" && mkdir -p "$work"
 scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[17,17]" --set output.every=0
        --set output.picture=false --quiet)
 steps=20
-sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 at_step() { "$drape" --restart "$1/checkpoint.h5" --dry-run | sed -n 's/.* at step \([0-9]*\)$/\1/p'; }
 seed=${DRAPE_TEST_SEED:-$RANDOM}
 RANDOM=$seed

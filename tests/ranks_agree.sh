@@ -16,9 +16,9 @@
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
-sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 # The final state's kinks (report.json zigzag), counted by each rank over its own particles.
-zz() { python3 -c 'import json,sys; z=json.load(open(sys.argv[1]))["zigzag"]; print(z["pairs"], z["zigzags"])' "$1/report.json"; }
+zz() { report "$1" '"%d %d" % (r["zigzag"]["pairs"], r["zigzag"]["zigzags"])'; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
 # A cloth let down onto the floor just inside the coarse mesh's contact layer
 # (half its cell diagonal, 44.2 mm): at rest on that mesh after a few steps,
@@ -45,36 +45,33 @@ for method in $cases; do
     OMP_NUM_THREADS=1 "$mpiexec" -n $n "$drape" "${args[@]}" --output "$work/$method-$n"
     one=$(sum "$work/$method-1") many=$(sum "$work/$method-$n")
     [[ -n $one && $one == "$many" ]] || { echo "$method: checksums differ: 1 rank $one, $n ranks $many"; exit 1; }
-    grep -q "\"ranks\": $n" "$work/$method-$n/report.json" || { echo "the report does not say $n ranks"; exit 1; }
-    python3 -c 'import json,sys; r=json.load(open(sys.argv[1])); sys.exit(not r["cpu_seconds"] > 0)' \
-      "$work/$method-$n/report.json" || { echo "$method: the $n-rank report has no CPU time"; exit 1; }
+    [[ $(field "$work/$method-$n" ranks) == "$n" ]] || { echo "the report does not say $n ranks"; exit 1; }
+    [[ $(report "$work/$method-$n" 'r["cpu_seconds"] > 0') == true ]] || { echo "$method: the $n-rank report has no CPU time"; exit 1; }
     [[ $(zz "$work/$method-1") == $(zz "$work/$method-$n") ]] ||
       { echo "$method: zigzag counts (pairs, zigzags) differ: 1 rank $(zz "$work/$method-1"), $n ranks $(zz "$work/$method-$n")"; exit 1; }
     h5diff "$work/$method-1/drape.h5" "$work/$method-$n/drape.h5" /frames /frames ||
       { echo "$method: drape.h5 frames differ between 1 and $n ranks"; exit 1; }
     if [[ $method == amrc ]]; then
-      moved=$(python3 -c 'import json,sys; print(sum(r["tiles_moved"] for r in json.load(open(sys.argv[1]))["rebalances"]))' \
-              "$work/$method-$n/report.json")
+      moved=$(report "$work/$method-$n" 'sum(b["tiles_moved"] for b in r["rebalances"])')
       (( moved > 0 )) || { echo "amrc: no tile migrated on $n ranks: the test does not cover a rebalance"; exit 1; }
       echo "amrc: $n ranks rebalanced, $moved tile move(s) in all"
     fi
     echo "$method: 1 and $n ranks agree: $one"
   done
-  grep -q '"iterations": [1-9]' "$work/$method-1/report.json" || { echo "$method: no iterations ran"; exit 1; }
+  (( $(field "$work/$method-1" iterations) > 0 )) || { echo "$method: no iterations ran"; exit 1; }
   if [[ $method == amrc_speed ]]; then
-    merges() { python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["amrc"]["coarsened"])' "$1/report.json"; }
+    merges() { report "$1" 'r["amrc"]["coarsened"]'; }
     held=$(merges "$work/amrc_speed-1") free=$(merges "$work/amrc-1")
     (( held < free )) || { echo "amrc_speed: $held merges, not fewer than $free without the speed condition"; exit 1; }
     echo "amrc_speed: $held merges against $free without the speed condition"
   fi
   if [[ $method == amrc_edges ]]; then
-    cut=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["amrc"]["refined_inside"])' "$work/$method-1/report.json")
+    cut=$(report "$work/$method-1" 'r["amrc"]["refined_inside"]')
     (( cut > 0 )) || { echo "amrc_edges: no leaf split for cutting into the box: the case does not cover the inside mask"; exit 1; }
     echo "amrc_edges: $cut leaf split(s) for cutting into the box"
   fi
   if [[ $method == sequence ]]; then
-    stages=$(python3 -c 'import json,sys; print(" ".join("%d@%d" % (g["level"], g["from_step"]) for g in json.load(open(sys.argv[1]))["stages"]))' \
-             "$work/$method-1/report.json")
+    stages=$(report "$work/$method-1" '" ".join("%d@%d" % (g["level"], g["from_step"]) for g in r["stages"])')
     [[ $stages =~ ^1@0\ 0@([0-9]+)$ ]] && (( BASH_REMATCH[1] >= 2 )) ||
       { echo "sequence: stages $stages, expected level 1 from step 0, then level 0 after a few steps at rest"; exit 1; }
     echo "sequence: stages $stages"

@@ -9,8 +9,7 @@ drape=$1 mpiexec=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
 scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[17,17]" --set output.every=5
        --set output.picture=false --quiet)
-sum() { grep -o '"state_checksum": "[0-9a-f]*"' "$1/report.json"; }
-field() { grep -o "\"$2\": [^,]*" "$1/report.json" | head -1 | cut -d' ' -f2; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 same() {  # same() REFERENCE CANDIDATE LABEL
   [[ $(sum "$1") == "$(sum "$2")" ]] || { echo "FAIL $3: $(sum "$1") vs $(sum "$2")"; exit 1; }
   h5diff "$1/drape.h5" "$2/drape.h5" /frames /frames || { echo "FAIL $3: drape.h5 frames differ"; exit 1; }
@@ -55,7 +54,7 @@ kill -TERM "$pid"
 status=0; wait "$pid" || status=$?
 cat "$work/sig.out"
 [[ $status == 0 ]] || { echo "FAIL: SIGTERM gave exit status $status, expected 0"; exit 1; }
-grep -q '"stopped_by_signal": "SIGTERM"' "$work/sig/report.json" ||
+[[ $(field "$work/sig" stopped_by_signal) == SIGTERM ]] ||
   { echo "FAIL: report.json does not name SIGTERM: the signal did not stop the run"; exit 1; }
 steps=$(field "$work/sig" steps)
 ((steps < 300)) || { echo "FAIL: SIGTERM landed after step $steps, past the reference's 300"; exit 1; }
