@@ -6,10 +6,12 @@
 // -ffp-contract=off keeps products and sums apart, so the lanes give the
 // scalar results bit for bit, with one vector division or square root in
 // place of four dependent scalar ones.
-#include <cmath>
+// With AVX only (the build's -march=native has it where the CPU does):
+// without it a 32-byte vector would pass in memory, and the kernels take
+// their scalar forms, the same numbers. DRAPE_LANES says which.
 #if defined(__AVX__)
+#define DRAPE_LANES 1
 #include <immintrin.h>
-#endif
 
 #include "solver/elements/v3.hpp"
 
@@ -20,13 +22,7 @@ using V4 = V3<D4>;  // lane k: the k-th of the four vectors
 
 inline D4 splat4(double a) { return D4{a, a, a, a}; }
 
-inline D4 sqrt4(D4 a) {
-#if defined(__AVX__)
-  return (D4)_mm256_sqrt_pd((__m256d)a);
-#else
-  return D4{std::sqrt(a[0]), std::sqrt(a[1]), std::sqrt(a[2]), std::sqrt(a[3])};
-#endif
-}
+inline D4 sqrt4(D4 a) { return (D4)_mm256_sqrt_pd((__m256d)a); }
 
 // The vectors p[i0..i3] as lanes.
 inline V4 lanes4(const V3<double> p[4], int i0, int i1, int i2, int i3) {
@@ -36,3 +32,6 @@ inline V4 lanes4(const V3<double> p[4], int i0, int i1, int i2, int i3) {
 inline V3<double> lane(const V4& a, int k) { return {a.x[k], a.y[k], a.z[k]}; }
 
 }  // namespace drape
+#else
+#define DRAPE_LANES 0
+#endif

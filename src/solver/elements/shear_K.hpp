@@ -108,6 +108,7 @@ inline T shear_cell_scalar(const V3<T> x[4], V3<T> g[4]) {
     return shear_angle_of(s, co);
 }
 
+#if DRAPE_LANES
 // Corner k of kShearCorners in lane k: its corner particle is k, its
 // i- and j-neighbours permute the lanes.
 inline V4 shear_lanes_a(const V3<double> p[4]) { return lanes4(p, 1, 0, 3, 2); }
@@ -148,14 +149,16 @@ inline double shear_cell_lanes(const V3<double> x[4], V3<double> g[4]) {
   }
 }
 
-// The cell's angle and gradient: on doubles the lanes' kernel, else the
-// scalar one.
+#endif
+
+// The cell's angle and gradient: on doubles the lanes' kernel (with
+// DRAPE_LANES), else the scalar one.
 template <class T, bool Angle = true>
 inline T shear_cell(const V3<T> x[4], V3<T> g[4]) {
-  if constexpr (std::is_same_v<T, double>)
-    return shear_cell_lanes<Angle>(x, g);
-  else
-    return shear_cell_scalar<T, Angle>(x, g);
+#if DRAPE_LANES
+  if constexpr (std::is_same_v<T, double>) return shear_cell_lanes<Angle>(x, g);
+#endif
+  return shear_cell_scalar<T, Angle>(x, g);
 }
 
 // The cell's gradient (shear_cell's, bit for bit) and its derivative along
@@ -177,9 +180,13 @@ inline void shear_cell_hv_scalar(const V3<double> x[4], const V3<double> r[4], V
   }
 }
 
-// shear_cell_hv_scalar with the four corners' shear_terms_hv in lanes:
-// its numbers bit for bit (tests: ShearLanes.*).
+// shear_cell_hv_scalar with the four corners' shear_terms_hv in lanes
+// (DRAPE_LANES; else the scalar kernel): its numbers bit for bit (tests:
+// ShearLanes.*).
 inline void shear_cell_hv(const V3<double> x[4], const V3<double> r[4], V3<double> g[4], V3<double> hr[4]) {
+#if !DRAPE_LANES
+  shear_cell_hv_scalar(x, r, g, hr);
+#else
   const V4 xc = lanes4(x, 0, 1, 2, 3), rc = lanes4(r, 0, 1, 2, 3);
   const V4 u = shear_lanes_a(x) - xc, v = shear_lanes_b(x) - xc;
   const V4 du = shear_lanes_a(r) - rc, dv = shear_lanes_b(r) - rc;
@@ -200,6 +207,7 @@ inline void shear_cell_hv(const V3<double> x[4], const V3<double> r[4], V3<doubl
   const V4 hq[3] = {wt * (minus * (dgu + dgv)), wt * dgu, wt * dgv};
   shear_lanes_add(gq, g);
   shear_lanes_add(hq, hr);
+#endif
 }
 
 }  // namespace drape
