@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 
 #include "world.hpp"
 
@@ -174,6 +175,60 @@ TEST(Contact, NoParticleEndsInsideTheBox) {
 // 2 mm inside the box's top goes back onto it, keeps its motion along the top
 // and remembers none into it (and none out of it from the push); near the
 // floor as well, both parts go.
+// The penalty skips box_distance where one face's gap alone puts a point
+// beyond the layer: the force, J^T r and slope are still the full
+// computation's, bit for bit, at points inside the box, in its layer and
+// beyond it, off faces, edges and corners (and just past the layer, where
+// the skip begins).
+TEST(Contact, TheFarSkipGivesTheFullPenaltyBitForBit) {
+  Contact c;
+  c.obstacle.shape = ObstacleShape::Box;
+  c.obstacle.center[2] = 0.2;
+  for (int k = 0; k < 3; ++k) c.obstacle.half[k] = 0.2;
+  c.thickness = 2e-3;
+  c.stiffness = 3.0;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int touching = 0, beyond = 0;
+  for (int sample = 0; sample < 20000; ++sample) {
+    double x[3];
+    for (int k = 0; k < 3; ++k) {  // mostly near a face's plane (within a few layers)
+      const double side = u(rng) > 0 ? 1.0 : -1.0;
+      const double near = c.obstacle.center[k] + side * (c.obstacle.half[k] + 3 * c.thickness * u(rng));
+      x[k] = sample % 4 == 0 ? c.obstacle.center[k] + 0.3 * u(rng) : near;
+    }
+    if (sample % 7 == 0) x[2] = c.obstacle.center[2] + c.obstacle.half[2] + c.thickness;  // the layer's edge
+    const double r[3] = {u(rng), u(rng), u(rng)};
+    double f[3], jtr[3] = {0, 0, 0}, slope = 0;
+    const bool hit = contact_force(c, x, f, r, jtr, &slope);
+    // The full computation: box_distance, then the penalty along its normal.
+    double n[3], hess[9], ref_f[3] = {0, 0, 0}, ref_jtr[3] = {0, 0, 0}, ref_slope = 0;
+    const double pen = c.thickness - box_distance(c.obstacle, x, n, hess);
+    if (pen > 0) {
+      double df;
+      const double p = penalty(c, pen, &df);
+      const double nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+      for (int a = 0; a < 3; ++a) {
+        ref_f[a] += p * n[a];
+        double hr = 0;
+        for (int b = 0; b < 3; ++b) hr += hess[3 * a + b] * r[b];
+        ref_jtr[a] += df * n[a] * nr - p * hr;
+      }
+      ref_slope += df;
+    }
+    ASSERT_EQ(hit, pen > 0) << "sample " << sample;
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(f[k], ref_f[k]) << "sample " << sample;
+      ASSERT_EQ(jtr[k], ref_jtr[k]) << "sample " << sample;
+    }
+    ASSERT_EQ(slope, ref_slope) << "sample " << sample;
+    touching += pen > 0;
+    beyond += pen <= 0;
+  }
+  EXPECT_GT(touching, 1000);
+  EXPECT_GT(beyond, 1000);
+}
+
 TEST(Contact, ASettledParticleKeepsOnlyItsMotionAlongTheSurface) {
   Obstacle box;
   box.shape = ObstacleShape::Box;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "amrc/amrc.hpp"
@@ -134,6 +135,36 @@ TEST(ShearCell, OneArgumentIsTheMeanOfTheCornerAngles) {
     EXPECT_NEAR(shear_cell(x, g), mean, 1e-14) << "sample " << sample;
   }
   EXPECT_GT(fallbacks, 0) << "no cell took each pair's own atan2";
+}
+
+// The lanes' kernels (shear_cell on doubles, shear_cell_hv: the four
+// corners side by side) give the scalar kernels' numbers bit for bit: the
+// angle, the gradient and H r, on cells from slightly to strongly sheared
+// and folded, at the finest mesh's scale and a coarse one's.
+TEST(ShearLanes, CellAndHessianVectorAreTheScalarKernelsBitForBit) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](const V3<double>* a, const V3<double>* b) { return std::memcmp(a, b, 4 * sizeof(V3<double>)) == 0; };
+  for (int sample = 0; sample < 3000; ++sample) {
+    const double amount = sample % 3 == 0 ? 0.05 : sample % 3 == 1 ? 0.4 : 0.9;
+    const double h = sample % 2 ? 1e-3 : 3e-2;
+    V3<double> x[4], r[4];
+    const double at[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    for (int k = 0; k < 4; ++k) {
+      x[k] = {h * (at[k][0] + amount * u(rng)), h * (at[k][1] + amount * u(rng)), h * amount * u(rng)};
+      r[k] = {u(rng), u(rng), u(rng)};
+    }
+    V3<double> g[4], gs[4], hr[4], grs[4], hrs[4];
+    const double phi = shear_cell(x, g), phis = shear_cell_scalar<double>(x, gs);
+    ASSERT_EQ(std::memcmp(&phi, &phis, sizeof phi), 0) << "sample " << sample;
+    ASSERT_TRUE(same(g, gs)) << "sample " << sample;
+    shear_cell<double, false>(x, g);
+    ASSERT_TRUE(same(g, gs)) << "sample " << sample;
+    shear_cell_hv(x, r, g, hr);
+    shear_cell_hv_scalar(x, r, grs, hrs);
+    ASSERT_TRUE(same(g, grs) && same(g, gs)) << "sample " << sample;
+    ASSERT_TRUE(same(hr, hrs)) << "sample " << sample;
+  }
 }
 
 TEST(ShearCell, AmrcCarriesTheForceAcrossSplitAndMerge) {

@@ -6,6 +6,9 @@
 // hand-derived shear_cell_hv.
 #include <cmath>
 
+#include <type_traits>
+
+#include "solver/elements/lanes.hpp"
 #include "solver/elements/v3.hpp"
 
 namespace drape {
@@ -77,9 +80,18 @@ inline constexpr ShearCorner kShearCorners[4] = {{0, 1, 2, 1.0}, {1, 0, 3, -1.0}
 // pass). Each corner's angle lies within (-pi/2, pi/2); where both pairs'
 // products have a positive real part, each pair's difference does too and
 // the sum lies within (-pi, pi), atan2's range; else each pair apart.
-template <class T, bool Angle = true>
-inline T shear_cell(const V3<T> x[4], V3<T> g[4]) {
+template <class T>
+inline T shear_angle_of(const T s[4], const T co[4]) {
   using std::atan2;
+  const T pr = s[0] * s[1] + co[0] * co[1], pi = co[0] * s[1] - s[0] * co[1];  // z0 conj(z1)
+  const T qr = s[3] * s[2] + co[3] * co[2], qi = co[3] * s[2] - s[3] * co[2];  // z3 conj(z2)
+  if (value(pr) > 0 && value(qr) > 0) return T(0.25) * atan2(pr * qi + pi * qr, pr * qr - pi * qi);
+  return T(0.25) * (atan2(pi, pr) + atan2(qi, qr));
+}
+
+// The corners one after another (any scalar: Dual too).
+template <class T, bool Angle = true>
+inline T shear_cell_scalar(const V3<T> x[4], V3<T> g[4]) {
   for (int k = 0; k < 4; ++k) g[k] = V3<T>{T(0), T(0), T(0)};
   T s[4], co[4];
   for (const ShearCorner& q : kShearCorners) {
@@ -90,19 +102,69 @@ inline T shear_cell(const V3<T> x[4], V3<T> g[4]) {
     g[q.a] = g[q.a] + w * gq[1];
     g[q.b] = g[q.b] + w * gq[2];
   }
-  if constexpr (!Angle) {
+  if constexpr (!Angle)
     return T(0);
-  } else {
-    const T pr = s[0] * s[1] + co[0] * co[1], pi = co[0] * s[1] - s[0] * co[1];  // z0 conj(z1)
-    const T qr = s[3] * s[2] + co[3] * co[2], qi = co[3] * s[2] - s[3] * co[2];  // z3 conj(z2)
-    if (value(pr) > 0 && value(qr) > 0) return T(0.25) * atan2(pr * qi + pi * qr, pr * qr - pi * qi);
-    return T(0.25) * (atan2(pi, pr) + atan2(qi, qr));
+  else
+    return shear_angle_of(s, co);
+}
+
+#if DRAPE_LANES
+// Corner k of kShearCorners in lane k: its corner particle is k, its
+// i- and j-neighbours permute the lanes.
+inline V4 shear_lanes_a(const V3<double> p[4]) { return lanes4(p, 1, 0, 3, 2); }
+inline V4 shear_lanes_b(const V3<double> p[4]) { return lanes4(p, 2, 3, 0, 1); }
+inline D4 shear_lane_weights() { return D4{0.25, -0.25, -0.25, 0.25}; }  // 0.25 * each corner's sign
+
+// Adds corner contributions gq[0..2] (lanes: corners, weighted) into out,
+// corner after corner as shear_cell_scalar: the same sums in the same order.
+inline void shear_lanes_add(const V4 gq[3], V3<double> out[4]) {
+  for (int k = 0; k < 4; ++k) out[k] = V3<double>{0, 0, 0};
+  for (int q = 0; q < 4; ++q) {
+    const ShearCorner& c = kShearCorners[q];
+    out[c.c] = out[c.c] + lane(gq[0], q);
+    out[c.a] = out[c.a] + lane(gq[1], q);
+    out[c.b] = out[c.b] + lane(gq[2], q);
   }
 }
 
+// shear_cell_scalar on doubles with the four corners' shear_terms in lanes:
+// its numbers bit for bit (tests: ShearLanes.*).
+template <bool Angle>
+inline double shear_cell_lanes(const V3<double> x[4], V3<double> g[4]) {
+  const V4 xc = lanes4(x, 0, 1, 2, 3);
+  const V4 u = shear_lanes_a(x) - xc, v = shear_lanes_b(x) - xc;
+  const V4 w = cross(u, v);
+  const D4 s = sqrt4(dot(w, w)), co = dot(u, v);
+  const D4 one = splat4(1.0), wt = shear_lane_weights();
+  const D4 is = one / s, ia = one / dot(u, u), ib = one / dot(v, v);
+  const V4 gu = is * (v - (co * ia) * u);
+  const V4 gv = is * (u - (co * ib) * v);
+  const V4 gq[3] = {wt * (splat4(-1.0) * (gu + gv)), wt * gu, wt * gv};
+  shear_lanes_add(gq, g);
+  if constexpr (!Angle) {
+    return 0.0;
+  } else {
+    const double sa[4] = {s[0], s[1], s[2], s[3]}, ca[4] = {co[0], co[1], co[2], co[3]};
+    return shear_angle_of(sa, ca);
+  }
+}
+
+#endif
+
+// The cell's angle and gradient: on doubles the lanes' kernel (with
+// DRAPE_LANES), else the scalar one.
+template <class T, bool Angle = true>
+inline T shear_cell(const V3<T> x[4], V3<T> g[4]) {
+#if DRAPE_LANES
+  if constexpr (std::is_same_v<T, double>) return shear_cell_lanes<Angle>(x, g);
+#endif
+  return shear_cell_scalar<T, Angle>(x, g);
+}
+
 // The cell's gradient (shear_cell's, bit for bit) and its derivative along
-// the corners' moves r: hr = H r.
-inline void shear_cell_hv(const V3<double> x[4], const V3<double> r[4], V3<double> g[4], V3<double> hr[4]) {
+// the corners' moves r: hr = H r. The corners one after another.
+inline void shear_cell_hv_scalar(const V3<double> x[4], const V3<double> r[4], V3<double> g[4],
+                                 V3<double> hr[4]) {
   using V = V3<double>;
   for (int k = 0; k < 4; ++k) g[k] = hr[k] = V{0, 0, 0};
   for (const ShearCorner& q : kShearCorners) {
@@ -116,6 +178,36 @@ inline void shear_cell_hv(const V3<double> x[4], const V3<double> r[4], V3<doubl
       hr[at[k]] = hr[at[k]] + w * hq[k];
     }
   }
+}
+
+// shear_cell_hv_scalar with the four corners' shear_terms_hv in lanes
+// (DRAPE_LANES; else the scalar kernel): its numbers bit for bit (tests:
+// ShearLanes.*).
+inline void shear_cell_hv(const V3<double> x[4], const V3<double> r[4], V3<double> g[4], V3<double> hr[4]) {
+#if !DRAPE_LANES
+  shear_cell_hv_scalar(x, r, g, hr);
+#else
+  const V4 xc = lanes4(x, 0, 1, 2, 3), rc = lanes4(r, 0, 1, 2, 3);
+  const V4 u = shear_lanes_a(x) - xc, v = shear_lanes_b(x) - xc;
+  const V4 du = shear_lanes_a(r) - rc, dv = shear_lanes_b(r) - rc;
+  const V4 w = cross(u, v);
+  const D4 s = sqrt4(dot(w, w)), co = dot(u, v);
+  const D4 uu = dot(u, u), vv = dot(v, v);
+  const D4 one = splat4(1.0), two = splat4(2.0), wt = shear_lane_weights();
+  const D4 is = one / s, ia = one / uu, ib = one / vv;
+  const D4 udu = dot(u, du), vdv = dot(v, dv), dco = dot(du, v) + dot(u, dv);
+  const D4 ds = is * (vv * udu + uu * vdv - co * dco);
+  const D4 ka = co * ia, kb = co * ib;
+  const D4 dka = (dco - two * ka * udu) * ia, dkb = (dco - two * kb * vdv) * ib;
+  const V4 gu = is * (v - ka * u), gv = is * (u - kb * v);
+  const V4 dgu = is * ((dv - (dka * u + ka * du)) - ds * gu);
+  const V4 dgv = is * ((du - (dkb * v + kb * dv)) - ds * gv);
+  const D4 minus = splat4(-1.0);
+  const V4 gq[3] = {wt * (minus * (gu + gv)), wt * gu, wt * gv};
+  const V4 hq[3] = {wt * (minus * (dgu + dgv)), wt * dgu, wt * dgv};
+  shear_lanes_add(gq, g);
+  shear_lanes_add(hq, hr);
+#endif
 }
 
 }  // namespace drape
