@@ -72,6 +72,16 @@ void kernel_times(World& w) {
           std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s\n",
                       (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds);
     }
+  {
+    MultigridSettings ms;
+    ms.smoothing = Smoothing::Line;
+    Multigrid mg(ms);
+    mg.setup(K, ids, n, n, 1);
+    const double setup = per_call([&] { mg.setup(K, ids, n, n, 1); });
+    const double cycle = per_call([&] { mg.apply(r.data(), x.data()); });
+    std::printf("bilinear, line smoothing: %d levels; set-up (values) %.2f products, V-cycle %.2f products\n",
+                mg.levels(), setup / product, cycle / product);
+  }
   // One linear solve to 1e-8 from this state, each preconditioner: how the
   // counts grow with the grid (the loose Newton solves hide it). Seconds:
   // set-up (K assembled, levels built) and solve, CPU time of this thread.
@@ -80,9 +90,11 @@ void kernel_times(World& w) {
     Preconditioner pc;
     Interpolation ip;
     int smoothed_levels;
+    Smoothing sm = Smoothing::Point;
   };
   const OneSolve solves[] = {{"jacobi", Preconditioner::Jacobi, Interpolation::Bilinear, 0},
                              {"multigrid bilinear", Preconditioner::Multigrid, Interpolation::Bilinear, 0},
+                             {"multigrid line", Preconditioner::Multigrid, Interpolation::Bilinear, 0, Smoothing::Line},
                              {"multigrid smoothed (finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 1},
                              {"multigrid smoothed (2 finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 2},
                              {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000}};
@@ -93,6 +105,7 @@ void kernel_times(World& w) {
     MultigridSettings ms;
     ms.interpolation = o.ip;
     ms.smoothed_levels = o.smoothed_levels;
+    ms.smoothing = o.sm;
     loop.newton().set_multigrid(ms);
     Timers t;
     loop.evaluator().settled_cost(z);
@@ -137,6 +150,11 @@ int run(int argc, char** argv) {
       if (steps > 0 && (sweep || ratio == 10.0))
         variants.push_back({"multigrid-d" + std::to_string(degree) + "-r" + std::to_string(int(ratio)),
                           Preconditioner::Multigrid, MultigridSettings{degree, ratio, 100}});
+  if (steps > 0) {
+    MultigridSettings line;
+    line.smoothing = Smoothing::Line;
+    variants.push_back({"multigrid-line", Preconditioner::Multigrid, line});
+  }
   std::vector<Result> results;
   for (const Variant& v : variants) {
     w.cloth = saved;
