@@ -73,6 +73,22 @@ void LineSmoother::find_lines(Direction& d, const BlockMatrix& A, const std::vec
       if (across_of_line[l] % d.colours == c) d.by_colour.push_back(int32_t(l));
     d.colour_start.push_back(int64_t(d.by_colour.size()));
   }
+  std::vector<std::pair<int32_t, int32_t>> rows;  // (row, position) of one colour
+  d.colour_rows.clear();
+  d.colour_pos.clear();
+  d.colour_row_start.assign(1, 0);
+  for (int c = 0; c < d.colours; ++c) {
+    rows.clear();
+    for (int64_t k = d.colour_start[c]; k < d.colour_start[c + 1]; ++k)
+      for (int64_t q = d.line_start[d.by_colour[k]]; q < d.line_start[d.by_colour[k] + 1]; ++q)
+        rows.emplace_back(d.order[q], int32_t(q));
+    std::sort(rows.begin(), rows.end());
+    for (const auto& [row, q] : rows) {
+      d.colour_rows.push_back(row);
+      d.colour_pos.push_back(q);
+    }
+    d.colour_row_start.push_back(int64_t(d.colour_rows.size()));
+  }
   d.dinv.assign(9 * size_t(n), 0.0);
   d.low.assign(9 * size_t(band) * size_t(n), 0.0);
 }
@@ -145,28 +161,41 @@ void LineSmoother::solve_line(const Direction& d, int64_t line, double* v) const
       sub_transposed_times(&d.low[9 * (size_t(band) * (q + dd) + dd - 1)], v + 3 * (q + dd), v + 3 * q);
 }
 
-// One colour's lines: each its residual from the current x, then its exact
-// correction (lines of a colour share no coupling: any order, any thread).
+// One colour's lines: the residuals on its rows from the current x, then
+// each line's exact correction (lines of a colour share no coupling), then x
+// updated: each row's result is the same on any thread count.
 void LineSmoother::sweep_colour(const Direction& d, int colour, const BlockMatrix& A, const double* b, double* x,
                                 bool x_zero) {
-  double* r = r_.data();
-#pragma omp parallel for schedule(static)
-  for (int64_t k = d.colour_start[colour]; k < d.colour_start[colour + 1]; ++k) {
-    const int64_t l = d.by_colour[k];
-    for (int64_t q = d.line_start[l]; q < d.line_start[l + 1]; ++q) {
-      const int64_t row = d.order[q];
-      double y[3] = {b[3 * row], b[3 * row + 1], b[3 * row + 2]};
-      if (!x_zero)
-        for (int64_t e = A.start[row]; e < A.start[row + 1]; ++e)
-          add_block_times(&A.val[9 * e], x + 3 * int64_t(A.col[e]), -1.0, y);
-      r[3 * q] = y[0];
-      r[3 * q + 1] = y[1];
-      r[3 * q + 2] = y[2];
+  double* __restrict r = r_.data();
+  const int64_t k0 = d.colour_row_start[colour], k1 = d.colour_row_start[colour + 1];
+#pragma omp parallel
+  {
+#pragma omp for schedule(static)
+    for (int64_t k = k0; k < k1; ++k) {
+      const int64_t row = d.colour_rows[k];
+      double y0 = b[3 * row], y1 = b[3 * row + 1], y2 = b[3 * row + 2];
+      if (!x_zero) {
+        const double* __restrict a = A.val.data() + 9 * A.start[row];
+        for (int64_t e = A.start[row], end = A.start[row + 1]; e < end; ++e, a += 9) {
+          const double* xc = x + 3 * int64_t(A.col[e]);
+          const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
+          y0 -= a[0] * x0 + a[1] * x1 + a[2] * x2;
+          y1 -= a[3] * x0 + a[4] * x1 + a[5] * x2;
+          y2 -= a[6] * x0 + a[7] * x1 + a[8] * x2;
+        }
+      }
+      double* rq = r + 3 * int64_t(d.colour_pos[k]);
+      rq[0] = y0;
+      rq[1] = y1;
+      rq[2] = y2;
     }
-    solve_line(d, l, r);
-    for (int64_t q = d.line_start[l]; q < d.line_start[l + 1]; ++q) {
-      const int64_t row = d.order[q];
-      for (int c = 0; c < 3; ++c) x[3 * row + c] += r[3 * q + c];
+#pragma omp for schedule(static)
+    for (int64_t k = d.colour_start[colour]; k < d.colour_start[colour + 1]; ++k) solve_line(d, d.by_colour[k], r);
+#pragma omp for schedule(static)
+    for (int64_t k = k0; k < k1; ++k) {
+      const int64_t row = d.colour_rows[k];
+      const double* rq = r + 3 * int64_t(d.colour_pos[k]);
+      for (int c = 0; c < 3; ++c) x[3 * row + c] += rq[c];
     }
   }
 }

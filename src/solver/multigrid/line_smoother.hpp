@@ -43,6 +43,10 @@ class LineSmoother {
     std::vector<int64_t> line_start;  // lines + 1 offsets into order
     std::vector<int32_t> by_colour;   // line numbers grouped by colour
     std::vector<int64_t> colour_start;
+    // Per colour, its rows ascending and their positions in `order`: the
+    // residuals and updates walk A's rows in memory order.
+    std::vector<int32_t> colour_rows, colour_pos;
+    std::vector<int64_t> colour_row_start;
     int colours = 1, band = 1;
     // Per position q in `order`: D^-1 (9) and L's blocks (q, q - d), d = 1..band (9 each).
     std::vector<double> dinv, low;
