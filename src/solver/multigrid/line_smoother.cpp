@@ -12,7 +12,7 @@ namespace {
 // border (not a multiple of s) on the next.
 inline int level_line(int g, int s) { return (g + s - 1) / s; }
 
-// out = a b^T - out's sign flipped: out -= a b^T (3 x 3, row-major).
+// out -= a b^T (3 x 3, row-major).
 inline void sub_product_transposed(const double* a, const double* b, double* out) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) out[3 * i + j] -= a[3 * i] * b[3 * j] + a[3 * i + 1] * b[3 * j + 1] + a[3 * i + 2] * b[3 * j + 2];
