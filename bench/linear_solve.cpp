@@ -4,7 +4,7 @@
 // state, and the linear iterations, Newton iterations and seconds per phase
 // are reported side by side (ratios from one run).
 // Kernel timings are the calling thread's CPU seconds (one thread by default).
-//   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--sweep] [--out FILE.json]
+//   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--sweep] [--modes] [--out FILE.json]
 #include <omp.h>
 
 #include <ctime>
@@ -37,9 +37,66 @@ struct Result {
   double seconds = 0, cpu = 0, precondition = 0, setup = 0, products = 0;
 };
 
+// The error that one V-cycle reduces least: e <- (I - M^-1 K) e from a fixed
+// rough start, 40 times; its reduction factor in the K-norm, the share of
+// |e|^2 on the box's top, its sides and the floor, by component, and how
+// rough it is along i and along j (per component, 0 smooth, 1 changing sign
+// every particle): which modes the cycle leaves.
+void worst_mode(World& w, const BlockMatrix& K, const std::vector<int64_t>& ids, int n, const MultigridSettings& ms,
+                const char* label) {
+  Multigrid mg(ms);
+  mg.setup(K, ids, n, n, 1);
+  const size_t m = 3 * ids.size();
+  std::vector<double> e(m), ke(m), c(m);
+  for (size_t k = 0; k < m; ++k) e[k] = std::sin(double(k * k % 1009));
+  auto knorm = [&] {
+    K.multiply(e.data(), ke.data());
+    double s = 0;
+    for (size_t k = 0; k < m; ++k) s += e[k] * ke[k];
+    return std::sqrt(s);
+  };
+  double before = knorm(), factor = 0;
+  for (int it = 0; it < 40; ++it) {
+    for (double& v : e) v /= before;
+    K.multiply(e.data(), ke.data());
+    mg.apply(ke.data(), c.data());
+    for (size_t k = 0; k < m; ++k) e[k] -= c[k];
+    const double after = knorm();
+    factor = after;  // e had K-norm 1
+    before = after;
+  }
+  const double top = w.scene.obstacle.center[2] + 0.5 * w.scene.obstacle.size[2];
+  double where[3][3] = {};  // region (top, sides, floor) x component
+  std::vector<int32_t> row(size_t(n) * n, -1);
+  for (size_t r = 0; r < ids.size(); ++r) row[ids[r]] = int32_t(r);
+  double rough[2][3] = {}, total[3] = {};
+  for (size_t r = 0; r < ids.size(); ++r) {
+    const double h = w.cloth.z[3 * ids[r] + 2];
+    const int region = h > top - 0.01 ? 0 : h > 0.01 ? 1 : 2;
+    for (int k = 0; k < 3; ++k) {
+      where[region][k] += e[3 * r + k] * e[3 * r + k];
+      total[k] += e[3 * r + k] * e[3 * r + k];
+    }
+    const int i = int(ids[r] / n), j = int(ids[r] % n);
+    const int32_t nb[2] = {i + 1 < n ? row[ids[r] + n] : -1, j + 1 < n ? row[ids[r] + 1] : -1};
+    for (int d = 0; d < 2; ++d)
+      if (nb[d] >= 0)
+        for (int k = 0; k < 3; ++k) {
+          const double df = e[3 * r + k] - e[3 * size_t(nb[d]) + k];
+          rough[d][k] += df * df;
+        }
+  }
+  const double all = total[0] + total[1] + total[2];
+  std::printf("worst mode, %s: K-norm factor per cycle %.3f; |e|^2 top/sides/floor x,y,z:", label, factor);
+  for (int g = 0; g < 3; ++g) std::printf(" [%.2f %.2f %.2f]", where[g][0] / all, where[g][1] / all, where[g][2] / all);
+  std::printf("; roughness along i x,y,z %.2f %.2f %.2f, along j %.2f %.2f %.2f\n", rough[0][0] / (4 * total[0]),
+              rough[0][1] / (4 * total[1]), rough[0][2] / (4 * total[2]), rough[1][0] / (4 * total[0]),
+              rough[1][1] / (4 * total[1]), rough[1][2] / (4 * total[2]));
+}
+
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
-void kernel_times(World& w) {
+void kernel_times(World& w, bool modes) {
   Evaluator& ev = w.loop->evaluator();
   double* z = w.cloth.z.data();
   ev.settled_cost(z);
@@ -55,6 +112,41 @@ void kernel_times(World& w) {
   std::vector<double> r(3 * ids.size()), x(3 * ids.size());
   for (size_t k = 0; k < r.size(); ++k) r[k] = std::cos(double(k));
   const double matvec = per_call([&] { K.multiply(r.data(), x.data()); });
+  if (modes) {
+    // How far below D^-1 A's top the smoother's 12-step power estimate is,
+    // level by level (3000 steps taken as the truth).
+    Multigrid probe{MultigridSettings{}};
+    probe.setup(K, ids, n, n, 1);
+    for (int l = 0; l + 1 < probe.levels(); ++l) {
+      const BlockMatrix& A = probe.matrix(l);
+      Chebyshev c;
+      c.setup(A, 1, 10);
+      const double quick = c.estimate();
+      std::vector<double> v(3 * A.rows), u(v.size()), t(v.size());
+      for (size_t k = 0; k < v.size(); ++k) v[k] = std::sin(1.0 + double(k * k % 101));
+      double lam = 0;
+      for (int it = 0; it < 3000; ++it) {
+        double nv = 0;
+        for (double q : v) nv += q * q;
+        nv = std::sqrt(nv);
+        for (double& q : v) q /= nv;
+        A.multiply(v.data(), u.data());
+        for (int64_t r = 0; r < A.rows; ++r)
+          for (int i = 0; i < 3; ++i)
+            t[3 * r + i] = c.dinv()[9 * r + 3 * i] * u[3 * r] + c.dinv()[9 * r + 3 * i + 1] * u[3 * r + 1] +
+                           c.dinv()[9 * r + 3 * i + 2] * u[3 * r + 2];
+        lam = 0;
+        for (double q : t) lam += q * q;
+        lam = std::sqrt(lam);
+        v = t;
+      }
+      std::printf("level %d: D^-1 A's top: 12-step estimate %.4f, 3000 steps %.4f\n", l, quick, lam);
+    }
+    MultigridSettings point, line;
+    line.smoothing = Smoothing::Line;
+    worst_mode(w, K, ids, n, point, "point smoothing");
+    worst_mode(w, K, ids, n, line, "line smoothing");
+  }
   std::printf("stiffness product %.3f ms; K assembled %.2f products, K x %.2f products (%lld blocks)\n",
               1e3 * product, assemble / product, matvec / product, (long long)K.blocks());
   for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed})
@@ -72,6 +164,19 @@ void kernel_times(World& w) {
           std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s\n",
                       (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds);
     }
+  {
+    MultigridSettings ms;
+    ms.smoothing = Smoothing::Line;
+    Multigrid mg(ms);
+    mg.setup(K, ids, n, n, 1);
+    const double setup = per_call([&] { mg.setup(K, ids, n, n, 1); });
+    const double cycle = per_call([&] { mg.apply(r.data(), x.data()); });
+    std::printf("bilinear, line smoothing: %d levels; set-up (values) %.2f products, V-cycle %.2f products\n",
+                mg.levels(), setup / product, cycle / product);
+    for (const MultigridLevelStats& l : mg.stats())
+      std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s (%lld)\n",
+                  (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds, (long long)l.cycles);
+  }
   // One linear solve to 1e-8 from this state, each preconditioner: how the
   // counts grow with the grid (the loose Newton solves hide it). Seconds:
   // set-up (K assembled, levels built) and solve, CPU time of this thread.
@@ -80,9 +185,11 @@ void kernel_times(World& w) {
     Preconditioner pc;
     Interpolation ip;
     int smoothed_levels;
+    Smoothing sm = Smoothing::Point;
   };
   const OneSolve solves[] = {{"jacobi", Preconditioner::Jacobi, Interpolation::Bilinear, 0},
                              {"multigrid bilinear", Preconditioner::Multigrid, Interpolation::Bilinear, 0},
+                             {"multigrid line", Preconditioner::Multigrid, Interpolation::Bilinear, 0, Smoothing::Line},
                              {"multigrid smoothed (finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 1},
                              {"multigrid smoothed (2 finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 2},
                              {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000}};
@@ -93,6 +200,7 @@ void kernel_times(World& w) {
     MultigridSettings ms;
     ms.interpolation = o.ip;
     ms.smoothed_levels = o.smoothed_levels;
+    ms.smoothing = o.sm;
     loop.newton().set_multigrid(ms);
     Timers t;
     loop.evaluator().settled_cost(z);
@@ -110,7 +218,8 @@ int run(int argc, char** argv) {
   int n = 129, steps = 5, threads = 1;
   double time = 0.12, dt = 5e-4;
   std::string out;
-  bool sweep = false;
+  bool sweep = false, modes = false;
+  app.add_flag("--modes", modes, "the error one V-cycle reduces least, point and line smoothing: where, how rough");
   app.add_flag("--sweep", sweep, "every smoother degree 1-3 and ratio 4, 10, 30 (else ratio 10)");
   app.add_option("--size", n, "particles per side")->check(CLI::Range(9, 4001));
   app.add_option("--time", time, "simulated seconds before the compared steps")->check(CLI::Range(0.0, 10.0));
@@ -127,7 +236,7 @@ int run(int argc, char** argv) {
   const Scene scene = landing_scene(n, dt);
   World w(scene, load_fabric(scene.cloth.fabric));
   step_to(w, time);
-  kernel_times(w);
+  kernel_times(w, modes);
   const Cloth saved = w.cloth;
   const Model saved_model = w.model;
   std::vector<Variant> variants;
@@ -137,6 +246,11 @@ int run(int argc, char** argv) {
       if (steps > 0 && (sweep || ratio == 10.0))
         variants.push_back({"multigrid-d" + std::to_string(degree) + "-r" + std::to_string(int(ratio)),
                           Preconditioner::Multigrid, MultigridSettings{degree, ratio, 100}});
+  if (steps > 0) {
+    MultigridSettings line;
+    line.smoothing = Smoothing::Line;
+    variants.push_back({"multigrid-line", Preconditioner::Multigrid, line});
+  }
   std::vector<Result> results;
   for (const Variant& v : variants) {
     w.cloth = saved;

@@ -55,7 +55,8 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
     if (l > 0) galerkin(matrix(l - 1), levels_[l - 1].transfer(), levels_[l - 1].AP, levels_[l].A, fresh);
     Level& L = levels_[l];
     if (l < last) {
-      L.smoother.setup(matrix(l), s_.degree, s_.ratio);
+      if (s_.smoothing == Smoothing::Line) L.line.setup(matrix(l), L.ids, ni, nj, L.stride, fresh);
+      if (s_.smoothing == Smoothing::Point || L.smoothed) L.smoother.setup(matrix(l), s_.degree, s_.ratio);
       if (L.smoothed)
         smooth_prolongation(matrix(l), L.smoother.dinv(), L.smoother.estimate(), L.P0, L.AP0, L.P, fresh);
     } else {
@@ -80,15 +81,26 @@ void Multigrid::cycle(int l, const double* b, double* x) {
   Level& L = levels_[l];
   Level& C = levels_[l + 1];
   const BlockMatrix& A = matrix(l);
-  L.smoother.smooth(A, b, x, true);
+  smooth(L, A, b, x, true);
   A.residual(b, x, L.r.data());
   restrict_to(L.transfer(), L.r.data(), C.b.data());
   const double t1 = omp_get_wtime();
   cycle(l + 1, C.b.data(), C.x.data());
   const double t2 = omp_get_wtime();
   prolong_add(L.transfer(), C.x.data(), x);
-  L.smoother.smooth(A, b, x, false);
+  smooth(L, A, b, x, false);
   st.seconds += (t1 - t0) + (omp_get_wtime() - t2);
+}
+
+}  // namespace drape
+
+namespace drape {
+
+// Pre-smoothing from x = 0; post-smoothing the adjoint (the line sweeps
+// reversed): the cycle is symmetric.
+void Multigrid::smooth(Level& L, const BlockMatrix& A, const double* b, double* x, bool pre) {
+  if (s_.smoothing == Smoothing::Line) L.line.smooth(A, b, x, pre, pre, s_.line_sweeps);
+  else L.smoother.smooth(A, b, x, pre);
 }
 
 }  // namespace drape

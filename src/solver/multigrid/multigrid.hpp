@@ -2,8 +2,8 @@
 // Geometric multigrid over the cloth's own grid hierarchy, as the Newton
 // step's preconditioner: levels of the free particles on every 2^l-th grid
 // line (transfer.hpp), coarse operators by Galerkin product P^T A P, a
-// Chebyshev smoother (smoother.hpp) and the coarsest level solved by Eigen
-// (coarse_solve.hpp). One V-cycle from zero is the preconditioner: a
+// Chebyshev smoother (smoother.hpp) or block lines (line_smoother.hpp), and
+// the coarsest level solved by Eigen (coarse_solve.hpp). One V-cycle from zero is the preconditioner: a
 // symmetric positive definite operator, as linear CG needs. Everything sums
 // in fixed orders: the same result on any thread count.
 #include <cstdint>
@@ -11,6 +11,7 @@
 
 #include "solver/multigrid/block_matrix.hpp"
 #include "solver/multigrid/coarse_solve.hpp"
+#include "solver/multigrid/line_smoother.hpp"
 #include "solver/multigrid/smoothed_prolongation.hpp"
 #include "solver/multigrid/smoother.hpp"
 #include "solver/multigrid/transfer.hpp"
@@ -21,6 +22,10 @@ namespace drape {
 // interpolation of the displacements (P0), or P0 smoothed by one damped
 // block-Jacobi step in the fine operator (smoothed_prolongation.hpp).
 enum class Interpolation { Bilinear, Smoothed };
+// The levels' smoother: Chebyshev on the point (3 x 3 block) diagonal, or
+// block-line Gauss-Seidel along i and j (line_smoother.hpp), robust where K
+// couples one grid direction much more strongly than the other.
+enum class Smoothing { Point, Line };
 
 struct MultigridSettings {
   int degree = 1;             // Chebyshev steps before and after the coarse correction (1 fastest at 129)
@@ -28,6 +33,8 @@ struct MultigridSettings {
   int64_t coarsest = 100;     // particles at most on the directly solved level
   Interpolation interpolation = Interpolation::Bilinear;  // the faster on the drape (set-up included)
   int smoothed_levels = 1000;  // the finest levels whose P is smoothed (the coarse operators widen with each)
+  Smoothing smoothing = Smoothing::Point;
+  int line_sweeps = 1;  // line smoothing: sweeps (i-lines, then j-lines) before and after the coarse correction
 };
 
 struct MultigridLevelStats {
@@ -74,9 +81,11 @@ class Multigrid {
     bool smoothed = false;
     const Prolongation& transfer() const { return smoothed ? P : P0; }
     Chebyshev smoother;
+    LineSmoother line;
     std::vector<double> b, x, r;
   };
   void cycle(int l, const double* b, double* x);
+  void smooth(Level& L, const BlockMatrix& A, const double* b, double* x, bool pre);
   void build_levels(const std::vector<int64_t>& ids, int ni, int nj);
 
   MultigridSettings s_;

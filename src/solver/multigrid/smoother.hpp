@@ -4,8 +4,9 @@
 // ordering of the particles, so it is the same operator on any thread count
 // (unlike Gauss-Seidel's sweeps); the same polynomial before and after the
 // coarse correction keeps the cycle symmetric, as CG's preconditioner must be.
-// It damps the eigenvalues of D^-1 A in [lmax / ratio, 1.1 lmax]: the
-// coarse level takes the rest; lmax by power iteration.
+// It damps the eigenvalues of D^-1 A in [lmax / ratio, lmax]: the coarse
+// level takes the rest; lmax by power iteration, times 1.1 (ratios up to 10)
+// or so that lmax + lmin is 1.21 x the estimate (above 10).
 #include <vector>
 
 #include "solver/multigrid/block_matrix.hpp"
