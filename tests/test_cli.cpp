@@ -585,6 +585,13 @@ TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
   EXPECT_EQ(report_field(j, "particles_solved"), "1089");
   EXPECT_EQ(report_field(j, "final_spacing"), "0.03125");
   EXPECT_EQ(report_field(j, "unconverged_steps"), "0");
+  // One stage, which took every step: its counts are the run's.
+  EXPECT_EQ(report_field(j, "stage_steps"), "3");
+  EXPECT_EQ(report_field(j, "stage_newton_iterations"), report_field(j, "newton_iterations"));
+  EXPECT_EQ(report_field(j, "stage_linear_iterations"), report_field(j, "linear_iterations"));
+  EXPECT_EQ(report_field(j, "stage_evaluations"), report_field(j, "evaluations"));
+  EXPECT_EQ(report_field(j, "stage_multigrid_builds"), "0");  // Jacobi
+  EXPECT_NE(report_field(j, "stage_newton_iterations"), "0");
   // The first line names the grid and the mesh solved first.
   EXPECT_NE(r.out.find("65 x 65 grid (1089 particles free), solved first on the level-1 mesh (spacing 31.2 mm)"),
             std::string::npos) << r.out;

@@ -125,6 +125,16 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
         .value("from_time", g.time)
         .value("level", g.level)
         .value("particles", (long long)g.particles)
+        // Names of their own: the top level's "steps" etc. stay the first match.
+        .value("stage_steps", (long long)g.steps)
+        .value("stage_newton_iterations", (long long)g.newton)
+        .value("stage_linear_iterations", (long long)g.linear)
+        .value("stage_evaluations", (long long)g.evaluations)
+        .value("stage_retries", (long long)g.retries)
+        .value("stage_contact_halvings", (long long)g.contact_halvings)
+        .value("stage_multigrid_builds", (long long)g.multigrid_builds)
+        .value("stage_seconds", g.seconds)
+        .value("stage_cpu_seconds", g.cpu_seconds)
         .end_object();
   j.end_array();
   j.value("final_level", s.final_level);

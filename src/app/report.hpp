@@ -44,12 +44,28 @@ struct Summary {
   int64_t refined = 0, coarsened = 0;                         // AMRC operations
   int64_t refined_inside = 0;  // of `refined`, leaves split for cutting into the obstacle
   std::vector<Rebalance> rebalances;                          // after AMRC, several ranks
-  // Grid sequencing: where each uniform mesh took over.
+  // Grid sequencing: where each uniform mesh took over, and what its steps
+  // cost in this process (what limits its dt: Newton iterations, retries,
+  // contact halvings, multigrid builds).
   struct Stage {
     int step;
     double time;
     int level;
     int64_t particles;
+    int64_t steps = 0, newton = 0, linear = 0, evaluations = 0;
+    int64_t retries = 0, contact_halvings = 0, multigrid_builds = 0;
+    double seconds = 0, cpu_seconds = 0;  // wall and this process's CPU time of its steps
+    void add(const StepStats& st, double wall, double cpu) {
+      ++steps;
+      newton += st.newton_iterations;
+      linear += st.iterations;
+      evaluations += st.evaluations;
+      retries += st.retries;
+      contact_halvings += st.contact_halvings;
+      multigrid_builds += st.multigrid_builds;
+      seconds += wall;
+      cpu_seconds += cpu;
+    }
   };
   std::vector<Stage> stages;
   int final_level = 0;              // grid sequencing: the level the run ended on (0: the finest, or AMRC)

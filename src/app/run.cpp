@@ -386,9 +386,14 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       if (poison == cloth.step + 1 && poison_rank < 0) inject_nan(cloth, lists);
       if (poison == cloth.step + 1 && poison_rank == rank)
         throw std::logic_error("fault injected on purpose (DRAPE_FAULT_INTERNAL_RANK)");
+      const auto step_start = std::chrono::steady_clock::now();
+      const int64_t step_cpu = process_cpu_microseconds();
       const StepStats st =
           loop.step(tm, [&](int it, double cost) { progress.iteration(cloth.step + 1, it, cost); });
       if (st.stopped) break;
+      if (!sum.stages.empty())
+        sum.stages.back().add(st, std::chrono::duration<double>(std::chrono::steady_clock::now() - step_start).count(),
+                              1e-6 * double(process_cpu_microseconds() - step_cpu));
       add_step(sum.counters, st, sum.active_final);
       sum.last = st;
       const bool easing = cloth.time < ease_until;

@@ -85,6 +85,12 @@ void declare_solver(ParameterList& list) {
            "newton's linear CG: jacobi | multigrid (one rank)",
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
            "grid's levels: iterations flat in the spacing; one rank only) ([design.md §7](design.md))")
+      .add("newton_target", &SolverSpec::newton_target, "", at_least(1),
+           "multigrid: Newton iterations per step that dt grows under",
+           "with `preconditioner = \"multigrid\"`, dt grows (×1.25) after a step of at most this many Newton "
+           "iterations and shrinks (×0.7) above 1.5 times it, after a retry, or past max_iterations/2 linear "
+           "iterations ([design.md §6](design.md#6-solvers-the-cost-is-stiff)); with `jacobi` the linear "
+           "iterations choose dt")
       .add("damping", &SolverSpec::damping, "", in_half_open(0, 1), "fraction of velocity removed per step",
            "fraction of the velocity removed after each step")
       .add("rest_speed", &SolverSpec::rest_speed, "m/s", non_negative(), "m/s; > 0 stops once at rest",

@@ -95,6 +95,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     if (mg && multigrid_stale(ev)) {
       setup_multigrid(ev);
       mg_solves_ = 0;
+      ++mg_builds_;
     }
   }
   double target, rs;

@@ -28,6 +28,8 @@ class NewtonSolver {
   // The multigrid's levels (empty with Jacobi).
   const std::vector<MultigridLevelStats>& multigrid_stats() const { return mg_.stats(); }
   Preconditioner preconditioner() const { return pc_; }
+  // Hierarchies built so far (a step's count: the difference across it).
+  int64_t multigrid_builds() const { return mg_builds_; }
   // The V-cycle's settings (before the first solve, or between steps).
   int multigrid_levels() const { return pc_ == Preconditioner::Multigrid ? mg_.levels() : 0; }
   void set_multigrid(const MultigridSettings& s) {
@@ -64,6 +66,7 @@ class NewtonSolver {
   uint64_t mg_stamp_ = 0;
   // Solves on the current build, and the first's and last's iterations.
   int mg_solves_ = 0, mg_first_ = 0, mg_last_ = 0;
+  int64_t mg_builds_ = 0;  // hierarchies built so far
 };
 
 }  // namespace drape

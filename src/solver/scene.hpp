@@ -60,6 +60,7 @@ struct SolverSpec {
   // CG on the total cost. Both stop when the same cost is below tolerance.
   SolverMethod method = SolverMethod::Newton;
   Preconditioner preconditioner = Preconditioner::Jacobi;
+  int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
   double drag = 0.0;            // 1/s: air drag -drag*m*v in each particle's Newton equation
   double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)

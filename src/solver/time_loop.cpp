@@ -197,10 +197,32 @@ void TimeLoop::accept(StepStats& st) {
   st.projections = red_.sum_i64(pushed);
 }
 
+// Jacobi's (and nonlinear CG's) iterations grow with dt·c/h: keeping them
+// within [max/8, max/2] keeps a step's cost bounded. The multigrid's linear
+// count is nearly flat in dt, so it cannot choose dt; the Newton iterations,
+// which grow with dt (the prediction's error), do: dt grows while a step
+// takes at most newton_target of them and shrinks above 1.5 times that, on a
+// retried step, or when the linear iterations pass max/2.
+double next_time_step(const SolverSpec& spec, double dt, const StepEffort& e) {
+  const int max = spec.max_iterations;
+  double next = dt;
+  if (spec.method == SolverMethod::Newton && spec.preconditioner == Preconditioner::Multigrid) {
+    const int target = spec.newton_target;
+    if (e.retries > 0 || e.linear > max / 2 || 2 * e.newton > 3 * target) next *= 0.7;
+    else if (e.newton <= target) next *= 1.25;
+  } else if (e.linear > max / 2) {
+    next *= 0.7;
+  } else if (e.linear < std::max(2, max / 8)) {
+    next *= 1.25;
+  }
+  return std::clamp(next, spec.dt_min, spec.dt_max);
+}
+
 StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>& on_iteration) {
   StepStats st;
   st.step = c_.step + 1;
   const double dt_start = c_.dt, first_step = cg_.first_step();
+  const int64_t builds_before = newton_.multigrid_builds();
   save_unknowns();
   // The ring's step-start forces, which its anchors read, from their owners:
   // settled_cost computes the ring's forces itself, so after a migration a
@@ -224,6 +246,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
     predict();
     if (c_.dt > spec_.dt_min && margin_overshoot() > 0.25 * m_.contact.thickness) {
       c_.dt = std::max(spec_.dt_min, 0.5 * c_.dt);
+      ++st.contact_halvings;
       continue;  // a shorter step: no CG spent on this one
     }
     stop_all_at_margin();
@@ -250,6 +273,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
     return st;
   }
   st.converged = r.converged;
+  st.multigrid_builds = int(newton_.multigrid_builds() - builds_before);
   st.cost_per_particle = r.cost_per_particle;
   st.dt = c_.dt;
   accept(st);
@@ -257,11 +281,11 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   c_.step = st.step;
   st.time = c_.time;
   c_.dt_prev = c_.dt;
-  // Keep the iterations per step within [max/8, max/2] by adapting dt.
-  const int it = r.iterations;
-  if (it > spec_.max_iterations / 2) c_.dt *= 0.7;
-  else if (it < std::max(2, spec_.max_iterations / 8)) c_.dt *= 1.25;
-  c_.dt = std::clamp(c_.dt, spec_.dt_min, spec_.dt_max);
+  StepEffort e;
+  e.linear = r.iterations;
+  e.newton = r.newton_iterations;
+  e.retries = st.retries;
+  c_.dt = next_time_step(spec_, c_.dt, e);
   return st;
 }
 

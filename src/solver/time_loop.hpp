@@ -17,6 +17,8 @@ struct StepStats {
   double time = 0, dt = 0;
   int iterations = 0, evaluations = 0, retries = 0;
   int newton_iterations = 0;  // Newton steps (solver.method = newton); iterations are then linear CG's
+  int contact_halvings = 0;   // dt halved before solving: the prediction overshot the contact margin
+  int multigrid_builds = 0;   // multigrid hierarchies built in this step
   bool converged = false;
   CostTerms cost;
   double cost_per_particle = 0;
@@ -26,6 +28,17 @@ struct StepStats {
   // as it was after the previous step (nothing else in this record counts).
   bool stopped = false;
 };
+
+// What a step cost, as the time-step rule reads it.
+struct StepEffort {
+  int linear = 0;    // CG iterations (Newton's linear ones, or nonlinear CG's)
+  int newton = 0;    // Newton iterations (0 with nonlinear CG)
+  int retries = 0;   // halvings after an unconverged attempt
+};
+
+// The next step's dt from this step's (a pure function: a restarted run
+// redoes it). See docs/design.md §6.
+double next_time_step(const SolverSpec& spec, double dt, const StepEffort& e);
 
 class TimeLoop {
  public:
