@@ -6,6 +6,7 @@
 
 #include <cstring>
 
+#include "amrc/amrc.hpp"
 #include "solver/memory_table.hpp"
 #include "world.hpp"
 
@@ -62,6 +63,46 @@ TEST(Memory, TablesListWhatTheWorldHolds) {
 TEST(Memory, BytesPerParticleStayUnderTheBound) {
   EXPECT_LE(held_after_two_steps(SolverMethod::Newton, 300).listed, 1694.0);
   EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1966.0);
+}
+
+size_t evaluator_bytes(World& w) {
+  MemoryTable t;
+  w.loop->evaluator().memory(t);
+  return t.total();
+}
+
+// The evaluator's arrays indexed by list position hold the lists' elements,
+// not the grid's: on grid sequencing's level 2 (a sixteenth of the
+// particles) its table is under a fifth of the finest mesh's. A mesh change
+// that is no new stage (AMRC's) grows them where the lists outgrow them and
+// keeps their capacity where they shrink; a new stage sizes them to its
+// lists, back to the finest mesh's figure on level 0.
+TEST(Memory, EvaluatorHoldsItsListsOnly) {
+  Scene s;
+  s.cloth.particles = {129, 129};
+  s.cloth.tile = 16;
+  World w(s, test_fabric());
+  Timers tm;
+  w.loop->step(tm);
+  const size_t finest = evaluator_bytes(w);
+  Amrc amrc(w.cloth, 2);
+  std::vector<int> all(w.tiling.count());
+  for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
+  auto on_level = [&](int level, bool new_stage) {
+    amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, level);
+    build_active_lists(w.cloth, w.tiling, all, w.lists);
+    w.loop->mesh_changed(new_stage);
+    w.loop->step(tm);
+    return evaluator_bytes(w);
+  };
+  const size_t coarse = on_level(2, true);
+  std::printf("evaluator: %zu bytes on the finest mesh, %zu on level 2\n", finest, coarse);
+  EXPECT_LT(coarse, finest / 5) << "level 2's lists hold a sixteenth of the finest mesh's elements";
+  const size_t grown = on_level(1, false);
+  EXPECT_GT(grown, coarse) << "level 1's lists outgrow level 2's arrays";
+  EXPECT_LT(grown, finest / 2);
+  EXPECT_EQ(on_level(2, false), grown) << "no new stage: the capacity stays";
+  EXPECT_EQ(on_level(0, true), finest) << "a new stage: sized to its lists";
 }
 
 // After the last step the solvers give their vectors back (the picture

@@ -55,8 +55,13 @@ class TimeLoop {
     newton_.release();
   }
 
-  // After AMRC changed the mesh (and the lists were rebuilt).
-  void mesh_changed() { free_ = red_.sum_i64(lists_.particles.size()); }
+  // After AMRC changed the mesh (and the lists were rebuilt); with
+  // `new_stage` (grid sequencing's next level), the evaluator's arrays are
+  // sized to the new lists (Evaluator::fit_to_lists), else they only grow.
+  void mesh_changed(bool new_stage = false) {
+    if (new_stage) ev_.fit_to_lists();
+    free_ = red_.sum_i64(lists_.particles.size());
+  }
 
   // The bending axis of every triple from the step-start positions x1.
   void freeze_bend_axes();
