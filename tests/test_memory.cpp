@@ -123,7 +123,9 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
   for (int k = 0; k < 2; ++k) kept.loop->step(tm), freed.loop->step(tm);
   const size_t before = listed(freed);
   freed.loop->release_solvers();
-  const size_t newton = 8 * size_t(freed.cloth.layout.tension()) * sizeof(double);  // its eight vectors
+  // Its eight vectors: two at z's positions, six compact (3 a row of the evaluator's).
+  const size_t newton =
+      (2 * size_t(freed.cloth.layout.tension()) + 6 * 3 * freed.loop->evaluator().row_capacity()) * sizeof(double);
   EXPECT_EQ(before - listed(freed), newton);
   int solved = 0;
   for (int k = 0; k < 12; ++k) {

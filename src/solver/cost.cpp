@@ -90,8 +90,8 @@ void Evaluator::fit_arrays(bool exact) {
   each(nb_s_, ns, 3, ms, int32_t(-1));
 }
 
-void Evaluator::fit_to_lists() {
-  fit_arrays(true);
+void Evaluator::fit_to_lists(bool exact) {
+  fit_arrays(exact);
   kg_ready_ = settled_ = false;  // the kept numbers may be gone
   rows_stamp_ = 0;               // and the rows
 }

@@ -115,11 +115,15 @@ class Evaluator {
   // band costs and slopes, neighbours, rows) hold the lists' elements only:
   // this rank's and its ring's, on the present mesh. They grow when the
   // lists outgrow them (a refinement, a migration) and keep their capacity
-  // when the lists shrink (AMRC coarsening: no allocation between steps);
-  // this sizes them to the lists as they are now, shrinking too. For a new
-  // mesh of a different size (grid sequencing's next stage), after the lists
-  // were rebuilt; between steps only.
-  void fit_to_lists();
+  // when the lists shrink (AMRC coarsening: no allocation between steps).
+  // After the lists were rebuilt, between steps: grows them where the lists
+  // outgrew them (else the first evaluation would, inside a step); with
+  // `exact` (a new mesh of another size: grid sequencing's next stage),
+  // sizes them to the lists, shrinking too.
+  void fit_to_lists(bool exact);
+  // The rows' capacity: free and hanging particles the arrays have room for
+  // (the Newton solver's compact vectors follow it).
+  size_t row_capacity() const { return rows_.capacity(); }
   // Its arrays' capacities.
   void memory(MemoryTable& t) const;
   // Puts AMRC's hanging particles (3 values per particle in x) on their

@@ -55,11 +55,14 @@ class TimeLoop {
     newton_.release();
   }
 
-  // After AMRC changed the mesh (and the lists were rebuilt); with
-  // `new_stage` (grid sequencing's next level), the evaluator's arrays are
-  // sized to the new lists (Evaluator::fit_to_lists), else they only grow.
+  // After AMRC changed the mesh (and the lists were rebuilt): the
+  // evaluator's arrays and Newton's compact vectors grow here, not in the
+  // next step, where the lists outgrew them; with `new_stage` (grid
+  // sequencing's next level) they are sized to the new lists, shrinking too
+  // (Evaluator::fit_to_lists).
   void mesh_changed(bool new_stage = false) {
-    if (new_stage) ev_.fit_to_lists();
+    ev_.fit_to_lists(new_stage);
+    newton_.fit_vectors(ev_);
     free_ = red_.sum_i64(lists_.particles.size());
   }
 
