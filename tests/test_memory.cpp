@@ -70,13 +70,20 @@ size_t evaluator_bytes(World& w) {
   w.loop->evaluator().memory(t);
   return t.total();
 }
+// Newton's compact vectors (the first row of its table).
+size_t compact_bytes(World& w) {
+  MemoryTable t;
+  w.loop->newton().memory(t);
+  return t.rows.at(0).bytes;
+}
 
 // The evaluator's arrays indexed by list position hold the lists' elements,
 // not the grid's: on grid sequencing's level 2 (a sixteenth of the
 // particles) its table is under a fifth of the finest mesh's. A mesh change
 // that is no new stage (AMRC's) grows them where the lists outgrow them and
 // keeps their capacity where they shrink; a new stage sizes them to its
-// lists, back to the finest mesh's figure on level 0.
+// lists, back to the finest mesh's figure on level 0. Newton's compact
+// vectors follow.
 TEST(Memory, EvaluatorHoldsItsListsOnly) {
   Scene s;
   s.cloth.particles = {129, 129};
@@ -84,7 +91,8 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
   World w(s, test_fabric());
   Timers tm;
   w.loop->step(tm);
-  const size_t finest = evaluator_bytes(w);
+  const size_t finest = evaluator_bytes(w), finest_compact = compact_bytes(w);
+  ASSERT_GT(finest_compact, 0u) << "the first step should have solved";
   Amrc amrc(w.cloth, 2);
   std::vector<int> all(w.tiling.count());
   for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
@@ -98,11 +106,13 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
   const size_t coarse = on_level(2, true);
   std::printf("evaluator: %zu bytes on the finest mesh, %zu on level 2\n", finest, coarse);
   EXPECT_LT(coarse, finest / 5) << "level 2's lists hold a sixteenth of the finest mesh's elements";
+  EXPECT_LT(compact_bytes(w), finest_compact / 10) << "Newton's compact vectors: level 2's rows";
   const size_t grown = on_level(1, false);
   EXPECT_GT(grown, coarse) << "level 1's lists outgrow level 2's arrays";
   EXPECT_LT(grown, finest / 2);
   EXPECT_EQ(on_level(2, false), grown) << "no new stage: the capacity stays";
   EXPECT_EQ(on_level(0, true), finest) << "a new stage: sized to its lists";
+  EXPECT_EQ(compact_bytes(w), finest_compact);
 }
 
 // After the last step the solvers give their vectors back (the picture
