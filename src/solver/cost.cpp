@@ -99,7 +99,7 @@ void Evaluator::fit_to_lists(bool exact) {
 void Evaluator::keep_products(bool on) {
   for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_}) std::vector<double>().swap(*a);  // off: no memory
   keep_ = on;
-  if (on) fit_arrays(true);
+  if (on) fit_to_lists(true);  // may move the rows too: listed again at the next call
   kg_ready_ = settled_ = false;
 }
 
