@@ -117,7 +117,7 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
 
 // Keeping the products again (keep_products sizes its arrays to the lists,
 // moving the others where their capacity was a finer mesh's) changes no
-// result: two worlds on level 2, one toggling, land on the same bits.
+// result: two worlds on level 1, one toggling, land on the same bits.
 TEST(Memory, KeepingProductsAgainOnACoarserMesh) {
   Scene s;
   s.cloth.particles = {33, 33};
