@@ -113,13 +113,12 @@ class Evaluator {
   const ActiveLists& lists() const { return lists_; }
   // The arrays indexed by list position (element buffers, kept numbers,
   // band costs and slopes, neighbours, rows) hold the lists' elements only:
-  // this rank's and its ring's, on the present mesh. They grow when the
-  // lists outgrow them (a refinement, a migration) and keep their capacity
-  // when the lists shrink (AMRC coarsening: no allocation between steps).
-  // After the lists were rebuilt, between steps: grows them where the lists
-  // outgrew them (else the first evaluation would, inside a step); with
-  // `exact` (a new mesh of another size: grid sequencing's next stage),
-  // sizes them to the lists, shrinking too.
+  // this rank's and its ring's, on the present mesh. After the lists were
+  // rebuilt, between steps: grows them where the lists outgrew them (a
+  // refinement, a migration; else the first evaluation would, inside a
+  // step) and keeps their capacity where the lists shrank (AMRC coarsening:
+  // no allocation); with `exact` (grid sequencing's next stage) sizes them
+  // to the lists, shrinking too.
   void fit_to_lists(bool exact);
   // The rows' capacity: free and hanging particles the arrays have room for
   // (the Newton solver's compact vectors follow it).
