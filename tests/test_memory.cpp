@@ -6,6 +6,7 @@
 
 #include <cstring>
 
+#include "amrc/amrc.hpp"
 #include "solver/memory_table.hpp"
 #include "world.hpp"
 
@@ -64,6 +65,87 @@ TEST(Memory, BytesPerParticleStayUnderTheBound) {
   EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1966.0);
 }
 
+size_t evaluator_bytes(World& w) {
+  MemoryTable t;
+  w.loop->evaluator().memory(t);
+  return t.total();
+}
+// Newton's compact vectors (the first row of its table).
+size_t compact_bytes(World& w) {
+  MemoryTable t;
+  w.loop->newton().memory(t);
+  return t.rows.at(0).bytes;
+}
+
+// The evaluator's arrays indexed by list position hold the lists' elements,
+// not the grid's: on grid sequencing's level 2 (a sixteenth of the
+// particles) its table is under a fifth of the finest mesh's. A mesh change
+// that is no new stage (AMRC's) grows them where the lists outgrow them and
+// keeps their capacity where they shrink; a new stage sizes them to its
+// lists, back to the finest mesh's figure on level 0. Newton's compact
+// vectors follow.
+TEST(Memory, EvaluatorHoldsItsListsOnly) {
+  Scene s;
+  s.cloth.particles = {129, 129};
+  s.cloth.tile = 16;
+  World w(s, test_fabric());
+  Timers tm;
+  w.loop->step(tm);
+  const size_t finest = evaluator_bytes(w), finest_compact = compact_bytes(w);
+  ASSERT_GT(finest_compact, 0u) << "the first step should have solved";
+  Amrc amrc(w.cloth, 2);
+  std::vector<int> all(w.tiling.count());
+  for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
+  auto on_level = [&](int level, bool new_stage) {
+    amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, level);
+    build_active_lists(w.cloth, w.tiling, all, w.lists);
+    w.loop->mesh_changed(new_stage);
+    w.loop->step(tm);
+    return evaluator_bytes(w);
+  };
+  const size_t coarse = on_level(2, true);
+  std::printf("evaluator: %zu bytes on the finest mesh, %zu on level 2\n", finest, coarse);
+  EXPECT_LT(coarse, finest / 5) << "level 2's lists hold a sixteenth of the finest mesh's elements";
+  EXPECT_LT(compact_bytes(w), finest_compact / 10) << "Newton's compact vectors: level 2's rows";
+  const size_t grown = on_level(1, false);
+  EXPECT_GT(grown, coarse) << "level 1's lists outgrow level 2's arrays";
+  EXPECT_LT(grown, finest / 2);
+  EXPECT_EQ(on_level(2, false), grown) << "no new stage: the capacity stays";
+  EXPECT_EQ(on_level(0, true), finest) << "a new stage: sized to its lists";
+  EXPECT_EQ(compact_bytes(w), finest_compact);
+}
+
+// Keeping the products again (keep_products sizes its arrays to the lists,
+// moving the others where their capacity was a finer mesh's) changes no
+// result: two worlds on level 1, one toggling, land on the same bits.
+TEST(Memory, KeepingProductsAgainOnACoarserMesh) {
+  Scene s;
+  s.cloth.particles = {33, 33};
+  s.cloth.tile = 8;
+  s.cloth.height = 0.401;  // contact within a few steps: Newton solves
+  World kept(s, test_fabric()), toggled(s, test_fabric());
+  Timers tm;
+  for (World* w : {&kept, &toggled}) {
+    Amrc amrc(w->cloth, 1);
+    amrc.set_uniform_level(w->cloth, w->fabric.density, s.cloth.shear, 1);
+    std::vector<int> all(w->tiling.count());
+    for (int t = 0; t < w->tiling.count(); ++t) all[t] = t;
+    build_active_lists(w->cloth, w->tiling, all, w->lists);
+    w->loop->mesh_changed(false);  // capacity: the finest mesh's
+    w->loop->step(tm);
+  }
+  toggled.loop->evaluator().keep_products(false);
+  toggled.loop->evaluator().keep_products(true);
+  int solved = 0;
+  for (int k = 0; k < 6; ++k) {
+    kept.loop->step(tm);
+    solved += toggled.loop->step(tm).iterations;
+  }
+  EXPECT_GT(solved, 0);
+  ASSERT_EQ(kept.cloth.z.size(), toggled.cloth.z.size());
+  EXPECT_EQ(0, std::memcmp(kept.cloth.z.data(), toggled.cloth.z.data(), kept.cloth.z.size() * sizeof(double)));
+}
+
 // After the last step the solvers give their vectors back (the picture
 // then reuses their memory); a step after that sizes them again and lands
 // where a run that kept them does, bit for bit.
@@ -82,7 +164,9 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
   for (int k = 0; k < 2; ++k) kept.loop->step(tm), freed.loop->step(tm);
   const size_t before = listed(freed);
   freed.loop->release_solvers();
-  const size_t newton = 8 * size_t(freed.cloth.layout.tension()) * sizeof(double);  // its eight vectors
+  // Its eight vectors: two at z's positions, six compact (3 a row of the evaluator's).
+  const size_t newton =
+      (2 * size_t(freed.cloth.layout.tension()) + 6 * 3 * freed.loop->evaluator().row_capacity()) * sizeof(double);
   EXPECT_EQ(before - listed(freed), newton);
   int solved = 0;
   for (int k = 0; k < 12; ++k) {

@@ -67,17 +67,23 @@ std::string gb(int64_t bytes) {
 
 }  // namespace
 
-int64_t estimated_bytes_per_rank(int64_t n, bool nonlinear_cg) {
-  // Every rank holds arrays over the whole grid (Cloth, the evaluator's
-  // buffers, the solver's vectors). Measured peak RSS (report.json's
-  // peak_rss_bytes) of the default scene on its finest mesh, 10 steps, one
-  // rank, 200x200 and 400x400: Newton 157.7 and 371.9 MB, i.e. 1785 bytes a
-  // particle over 86 MB (multigrid, AMRC and grid sequencing within 62
-  // bytes a particle of it); the nonlinear CG (or the numeric gradient,
-  // which runs it) 168.4 and 415.6 MB, 2060 bytes over 86 MB: its vectors
-  // are larger than Newton's. Rounded up, for a margin.
-  const int64_t per_particle = nonlinear_cg ? 2100 : 1900, fixed = int64_t(96) << 20;
-  return fixed + per_particle * n;
+int64_t estimated_bytes_per_rank(int64_t n, int ranks, bool nonlinear_cg) {
+  // Measured peak RSS (report.json's peak_rss_bytes) of the default scene on
+  // its finest mesh, 10 steps, one rank, 200x200 and 400x400: Newton 157.7
+  // and 371.9 MB, i.e. 1785 bytes a particle over 86 MB (multigrid, AMRC and
+  // grid sequencing within 62 bytes a particle of it); the nonlinear CG (or
+  // the numeric gradient, which runs it) 168.4 and 415.6 MB, 2060 bytes over
+  // 86 MB: its vectors are larger than Newton's. Rounded up, for a margin.
+  // Of those, the arrays sized by the rank's lists (the evaluator's in list
+  // order, Newton's compact vectors, the lists: 1168 of 1667 listed bytes a
+  // particle at 1000 x 1000) fall with more ranks; the cloth's, the
+  // residual, the vectors at z's positions and the nonlinear CG's stay the
+  // grid's. A rank's lists are counted as 1.5 times its share of the grid
+  // (METIS's imbalance, AMRC's rebalancing), at most the whole.
+  const int64_t grid = nonlinear_cg ? 1050 : 650, listed = nonlinear_cg ? 1050 : 1250;
+  const int64_t fixed = int64_t(96) << 20;
+  const double share = std::min(1.0, 1.5 / std::max(1, ranks));
+  return fixed + grid * n + int64_t(double(listed) * share * double(n));
 }
 
 int64_t available_bytes() {
@@ -97,7 +103,7 @@ int64_t available_bytes() {
 void check_memory(const Scene& scene, MPI_Comm comm) {
   const auto& p = scene.cloth.particles;
   const bool cg = scene.solver.method == SolverMethod::Cg || scene.solver.gradient == GradientMode::Numeric;
-  const int64_t need = estimated_bytes_per_rank(int64_t(p[0]) * p[1], cg);
+  const int64_t need = estimated_bytes_per_rank(int64_t(p[0]) * p[1], size_of(comm), cg);
   // The tightest rank decides for all (MiB fit an int up to 2 PiB).
   const int64_t mine = std::min<int64_t>(available_bytes() >> 20, std::numeric_limits<int>::max());
   const int64_t have = int64_t(-max_over_ranks(comm, -int(mine))) << 20;
@@ -105,7 +111,7 @@ void check_memory(const Scene& scene, MPI_Comm comm) {
   throw InputError("cloth.particles = [" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + "] needs about " +
                    gb(need) + " GB per rank, " + gb(have) +
                    " GB are available: use fewer particles or give each rank more memory (every rank holds "
-                   "arrays over the whole grid, so more ranks do not lower it)");
+                   "some arrays over the whole grid: more ranks lower it only in part)");
 }
 
 }  // namespace drape

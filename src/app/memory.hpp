@@ -10,9 +10,9 @@
 
 namespace drape {
 
-// Estimated peak resident bytes of one rank for a grid of n particles,
-// solved by Newton or by the nonlinear CG (which holds more vectors).
-int64_t estimated_bytes_per_rank(int64_t n, bool nonlinear_cg);
+// Estimated peak resident bytes of one rank of `ranks` for a grid of n
+// particles, solved by Newton or by the nonlinear CG (which holds more vectors).
+int64_t estimated_bytes_per_rank(int64_t n, int ranks, bool nonlinear_cg);
 
 // Bytes this rank may still have, plus what it holds now (so comparable to
 // a peak RSS): the least of MemAvailable, the RLIMIT_AS and RLIMIT_DATA soft

@@ -305,7 +305,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     int last_checkpoint = opt.restart ? cloth.step : -1;
     // AMRC between steps (the paper checks every few CG iterations; between
     // steps the minimiser never sees the mesh change under it).
-    auto mesh_changed = [&] {
+    auto mesh_changed = [&](bool new_stage) {
       amrc->lift_new_particles(cloth, model.contact);
       if (ranks > 1) {
         ScopedPhase ph(tm, kMigrate);
@@ -322,7 +322,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         }
       }
       rebuild_lists();
-      loop.mesh_changed();
+      loop.mesh_changed(new_stage);
       const int64_t active = active_particles(cloth);
       sum.active_min = std::min(sum.active_min, active);
       sum.active_max = std::max(sum.active_max, active);
@@ -341,7 +341,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       sum.refined += a.refined;
       sum.coarsened += a.coarsened;
       sum.refined_inside += a.refined_inside;
-      if (a.refined != 0 || a.coarsened != 0) mesh_changed();
+      if (a.refined != 0 || a.coarsened != 0) mesh_changed(false);
     };
     // Grid sequencing: the cloth at rest on a coarse mesh goes on on the next finer one.
     double ease_until = 0;  // stretched edges eased by the last split relax until this time
@@ -352,7 +352,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
         amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level);
       }
       stage_physics(model, scene, fabric, cloth.grid, finest_force_scale, sequencing, sequence_level);
-      mesh_changed();
+      mesh_changed(true);
       const double eased = red.max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
       ease_until = cloth.time + eased / kEaseRate;
       sum.stages.push_back({cloth.step, cloth.time, sequence_level, sum.active_final});

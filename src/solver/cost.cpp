@@ -27,35 +27,79 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
     : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer), halo_(halo) {
   const int64_t n = cloth.grid.n();
   if (n > kMaxParticles) throw std::length_error("Evaluator: more particles than GatherRow's offsets reach");
-  buf_e_.assign(2 * n * 6, 0.0);
-  buf_t_.assign(2 * n * 9, 0.0);
-  buf_s_.assign(n * kShearSlot, 0.0);
   cost_p_.assign(n, 0.0);
-  cost_e_.assign(2 * n, 0.0);
-  cost_t_.assign(2 * n, 0.0);
-  cost_s_.assign(n, 0.0);
   rho_.assign(3 * n, 0.0);
-  k_slope_.assign(5 * n, 0.0);
-  k_tension_.assign(2 * n, 0.0);
-  keep_products(true);
-  rows_.resize(n);
+  keep_ = true;  // keep_products(true), sized below
   at_e_.assign(2 * n, -1);
   at_t_.assign(2 * n, -1);
   at_s_.assign(n, -1);
-  nb_e_.assign(2 * n, -1);
-  nb_t_.assign(4 * n, -1);
-  nb_s_.assign(3 * n, -1);
+  fit_arrays(true);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
 }
 
+namespace {
+// v holds `need` entries, `fill` where new: capacity grows where need
+// exceeds it, with an eighth to spare (but never past `most`, the grid's
+// count: an AMRC mesh refines some leaves at a time) or, with `exact`, is
+// need (shrinks too). A new capacity takes a new array: the contents are
+// rewritten before they are read, none is copied.
+template <class T>
+void fit(std::vector<T>& v, size_t need, size_t most, bool exact, const T& fill) {
+  if (exact ? v.capacity() != need : v.capacity() < need) {
+    std::vector<T> fresh;
+    fresh.reserve(exact ? need : std::max(need, std::min(most, need + need / 8)));
+    v.swap(fresh);
+  }
+  v.resize(need, fill);  // within the capacity: no allocation
+}
+}  // namespace
+
+// Sizes per element: the owned elements and the ring's; per row: the free
+// particles and the hanging ones.
+void Evaluator::fit_arrays(bool exact) {
+  const size_t n = size_t(c_.grid.n());
+  const size_t ne = size_t(lists_.edges.size() + lists_.ring_edges.size());
+  const size_t nt = size_t(lists_.triples.size() + lists_.ring_triples.size());
+  const size_t ns = size_t(lists_.shears.size() + lists_.ring_shears.size());
+  const size_t nr = size_t(lists_.particles.size()) + lists_.hanging.size();
+  // An array of `per` entries an element, of `count` elements, at most `most`.
+  auto each = [exact](auto& v, size_t count, size_t per, size_t most, auto fill) {
+    fit(v, per * count, per * most, exact, fill);
+  };
+  const size_t me = 2 * n, mt = 2 * n, ms = n;  // the grid's slots
+  each(buf_e_, ne, kEdgeSlot, me, 0.0);
+  each(buf_t_, nt, kTripleSlot, mt, 0.0);
+  each(buf_s_, ns, kShearSlot, ms, 0.0);
+  each(cost_e_, ne, 1, me, 0.0);
+  each(cost_t_, nt, 1, mt, 0.0);
+  each(cost_s_, ns, 1, ms, 0.0);
+  if (slopes_) fit_slopes(exact);
+  each(k_tension_, ne, 1, me, 0.0);
+  each(k_slope_e_, ne, 1, me, 0.0);
+  each(k_slope_t_, nt, 1, mt, 0.0);
+  each(k_slope_s_, ns, 1, ms, 0.0);
+  if (keep_) {
+    each(kg_e_, ne, kKgEdge, me, 0.0);
+    each(kg_t_, nt, kKgTriple, mt, 0.0);
+    each(kg_s_, ns, kKgCell, ms, 0.0);
+    each(kc_, nr, kKc, n, 0.0);
+  }
+  each(rows_, nr, 1, n, GatherRow{});
+  each(nb_e_, ne, 1, me, int32_t(-1));
+  each(nb_t_, nt, 2, mt, int32_t(-1));
+  each(nb_s_, ns, 3, ms, int32_t(-1));
+}
+
+void Evaluator::fit_to_lists(bool exact) {
+  fit_arrays(exact);
+  kg_ready_ = settled_ = false;  // the kept numbers may be gone
+  rows_stamp_ = 0;               // and the rows
+}
+
 void Evaluator::keep_products(bool on) {
-  const int64_t n = on ? c_.grid.n() : 0;
   for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_}) std::vector<double>().swap(*a);  // off: no memory
-  kg_e_.assign(2 * n * kKgEdge, 0.0);
-  kg_t_.assign(2 * n * kKgTriple, 0.0);
-  kg_s_.assign(n * kKgCell, 0.0);
-  kc_.assign(n * kKc, 0.0);
   keep_ = on;
+  if (on) fit_to_lists(true);  // may move the rows too: listed again at the next call
   kg_ready_ = settled_ = false;
 }
 
@@ -71,7 +115,7 @@ void Evaluator::memory(MemoryTable& t) const {
   t.add(o, "band costs, slopes, force derivatives",
         sum({&cost_p_, &cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
   t.add(o, "residual", rho_);
-  t.add(o, "K's frozen slopes and tensions", sum({&k_slope_, &k_tension_}));
+  t.add(o, "K's frozen slopes and tensions", sum({&k_slope_e_, &k_slope_t_, &k_slope_s_, &k_tension_}));
   t.add(o, "gather rows", rows_);
   t.add(o, "slot positions, neighbours in list order",
         (at_e_.capacity() + at_t_.capacity() + at_s_.capacity() + nb_e_.capacity() + nb_t_.capacity() +
@@ -104,6 +148,7 @@ void Evaluator::list_rows() {
   if (rows_stamp_ == lists_.stamp && lists_.stamp != 0 && rows_hanging_ == lists_.hanging.size()) return;
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
+  fit_arrays(false);  // the lists' sizes, within the capacity unless they outgrew it
   // The hanging particles' forces and results on the way to their ends, by
   // grid index: sized once the lists have room for hanging particles (AMRC's
   // first ones, or room reserved for them up front), so a uniform mesh never
@@ -131,8 +176,6 @@ void Evaluator::list_rows() {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
   });
   const ActiveList& pl = lists_.particles;
-  if (size_t(pl.size()) + lists_.hanging.size() > rows_.size())
-    throw std::logic_error("Evaluator: more free and hanging particles than the grid has");
   int unlisted = 0;
 #pragma omp parallel for schedule(static) reduction(+ : unlisted)
   for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
@@ -370,10 +413,19 @@ CostTerms Evaluator::settled_cost(double* z) {
 // for one, so Newton's runs (settled_cost, products) never hold them. Once
 // sized, every cost pass writes them, as it always did.
 void Evaluator::size_slopes() {
-  if (!gq_e_.empty()) return;
-  const int64_t n = c_.grid.n();
-  for (auto* v : {&gq_e_, &gq_t_, &gf_e_, &gf_t_}) v->assign(2 * n, 0.0);
-  for (auto* v : {&gq_s_, &gf_s_}) v->assign(n, 0.0);
+  if (slopes_) return;
+  slopes_ = true;
+  fit_slopes(true);
+}
+
+void Evaluator::fit_slopes(bool exact) {
+  const size_t n = size_t(c_.grid.n());
+  const size_t ne = size_t(lists_.edges.size() + lists_.ring_edges.size());
+  const size_t nt = size_t(lists_.triples.size() + lists_.ring_triples.size());
+  const size_t ns = size_t(lists_.shears.size() + lists_.ring_shears.size());
+  for (auto* v : {&gq_e_, &gf_e_}) fit(*v, ne, 2 * n, exact, 0.0);
+  for (auto* v : {&gq_t_, &gf_t_}) fit(*v, nt, 2 * n, exact, 0.0);
+  for (auto* v : {&gq_s_, &gf_s_}) fit(*v, ns, n, exact, 0.0);
 }
 
 CostTerms Evaluator::evaluate(double* z, double* grad) {

@@ -85,7 +85,7 @@ class Evaluator {
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
   // Whether stiffness_product keeps its z-only numbers across a linear
-  // solve (55 doubles a particle of the grid; on from the start): off, every
+  // solve (55 doubles a listed particle; on from the start): off, every
   // product computes them again, the same numbers (bench_gradient's
   // BM_KeptProducts times both). Allocates: call it before the time loop.
   void keep_products(bool on);
@@ -111,6 +111,18 @@ class Evaluator {
   const std::vector<double>& residual() const { return rho_; }
 
   const ActiveLists& lists() const { return lists_; }
+  // The arrays indexed by list position (element buffers, kept numbers,
+  // band costs and slopes, neighbours, rows) hold the lists' elements only:
+  // this rank's and its ring's, on the present mesh. After the lists were
+  // rebuilt, between steps: grows them where the lists outgrew them (a
+  // refinement, a migration; else the first evaluation would, inside a
+  // step) and keeps their capacity where the lists shrank (AMRC coarsening:
+  // no allocation); with `exact` (grid sequencing's next stage) sizes them
+  // to the lists, shrinking too.
+  void fit_to_lists(bool exact);
+  // The rows' capacity: free and hanging particles the arrays have room for
+  // (the Newton solver's compact vectors follow it).
+  size_t row_capacity() const { return rows_.capacity(); }
   // Its arrays' capacities.
   void memory(MemoryTable& t) const;
   // Puts AMRC's hanging particles (3 values per particle in x) on their
@@ -128,6 +140,13 @@ class Evaluator {
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   CostTerms cost_pass(double* z, double* settle);
   void size_slopes();
+  // Sizes the arrays kept in list order (and the rows) for the lists now:
+  // grown where a list outgrew them (with an eighth to spare), else kept;
+  // with `exact`, to the lists' sizes (shrunk too). Their contents are
+  // rewritten before they are read (rows and neighbours by list_rows).
+  void fit_arrays(bool exact);
+  void fit_slopes(bool exact);
+  bool slopes_ = false;  // the gradient's slopes are held (size_slopes)
   // An element's stiffness numbers at z (edge_kept's, kept_gradients'),
   // its band stop computed here; its frozen tension and slope recorded.
   void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
@@ -215,8 +234,8 @@ class Evaluator {
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
   std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
-  std::vector<double> k_slope_, k_tension_;       // K's frozen band slopes (per force slot, from
-                                                  // the tension block) and edge tensions
+  std::vector<double> k_slope_e_, k_slope_t_, k_slope_s_;  // K's frozen band slopes, list order
+  std::vector<double> k_tension_;                 // and edge tensions
   // stiffness_product's z-only numbers (keep_products), the elements' by
   // list position, the particles' by row (rows_): edges (edge_kept), triples
   // and cells (slope factor, then the gradient, 3 or 4 x 3), contact (force,
@@ -261,9 +280,11 @@ class Evaluator {
   // element pass streams through them and a particle finds its elements'
   // entries on nearby lines. rows_: each owned particle's entries (by its
   // position in the particle list), then each hanging particle's
-  // (hanging_row; free and hanging particles together are at most the
-  // grid's); at_e_, at_t_, at_s_: slot -> position, -1 where the slot is in
-  // no list. For rows_stamp_'s lists and rows_hanging_ hanging particles.
+  // (hanging_row); at_e_, at_t_, at_s_: slot -> position, -1 where the slot
+  // is in no list (by slot: the grid's size). For rows_stamp_'s lists and
+  // rows_hanging_ hanging particles. All but the slot maps are sized by the
+  // lists (fit_arrays): on several ranks, or on a coarse mesh, they hold
+  // this rank's elements only.
   std::vector<GatherRow> rows_;
   std::vector<int32_t> at_e_, at_t_, at_s_;
   // The neighbour tables' entries each element reads, in list order too:

@@ -13,13 +13,19 @@ NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots, Preconditioner p
 
 // Sized at the first solve, not with the time loop: a run with the nonlinear
 // CG (or the numeric gradient) never solves, and would hold them for nothing.
-// Every vector holds positions only (3 a particle of the grid): the product's
-// operand and K p too (the evaluator writes them at the positions of z's
+// Every vector holds positions only: the compact ones 3 a row the evaluator
+// has room for (they change when its rows' capacity does, at a mesh change:
+// TimeLoop::mesh_changed calls fit_vectors), the product's operand and K p 3
+// a particle of the grid (the evaluator writes them at the positions of z's
 // layout, which come first).
-void NewtonSolver::size_vectors() {
-  const size_t nx = size_t(c_.layout.tension());
-  if (r_.size() == nx) return;
-  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &pg_, &kp_}) v->assign(nx, 0.0);
+void NewtonSolver::size_vectors(const Evaluator& ev) {
+  const size_t nx = size_t(c_.layout.tension()), nc = 3 * ev.row_capacity();
+  if (pg_.size() != nx)
+    for (auto* v : {&pg_, &kp_}) v->assign(nx, 0.0);
+  if (r_.size() == nc && r_.capacity() == nc) return;
+  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_}) {
+    std::vector<double>(nc, 0.0).swap(*v);  // exactly nc: a shrink gives memory back
+  }
 }
 
 void NewtonSolver::release() {
@@ -80,7 +86,7 @@ bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
-  size_vectors();
+  size_vectors(ev);
   double *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(), *kpc = kpc_.data(),
          *dc = dc_.data(), *pg = pg_.data(), *kp = kp_.data();
   // The diagonal at z's indices lands in K p's vector: it is read once, into
@@ -205,7 +211,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   }
   res.evaluations = 1;
   double c0 = res.cost.total();
-  size_vectors();
+  size_vectors(ev);
   // The free particles' positions before the line search's trials, in the
   // linear solve's residual: it is dead from the solve's end to the next.
   double* zt = r_.data();

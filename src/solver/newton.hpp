@@ -44,6 +44,11 @@ class NewtonSolver {
   void memory(MemoryTable& t) const;
   // Gives its vectors back (a later solve sizes them again).
   void release();
+  // After a mesh change, between steps: the compact vectors follow the
+  // evaluator's row capacity, if they are held (else the first solve sizes them).
+  void fit_vectors(const Evaluator& ev) {
+    if (!r_.empty()) size_vectors(ev);
+  }
 
  private:
   void setup_multigrid(Evaluator& ev);
@@ -53,12 +58,13 @@ class NewtonSolver {
   Minimizer& dots_;
   // Compact (Minimizer::for_each_unknown's c): the step, residual, scaled
   // residual, direction, K p and diagonal; r_ holds the positions before
-  // the line search's trials between solves.
+  // the line search's trials between solves. 3 per row of the evaluator's
+  // (its free and hanging particles' capacity: this rank's, on this mesh).
   std::vector<double> d_, r_, s_, p_, kpc_, dc_;
   // At z's position indices: the direction for the product, K p (and the
   // diagonal before the first product).
   std::vector<double> pg_, kp_;
-  void size_vectors();
+  void size_vectors(const Evaluator& ev);
   Preconditioner pc_;
   BlockMatrix k_;   // K assembled (multigrid's finest level)
   Multigrid mg_;

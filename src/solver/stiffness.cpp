@@ -131,8 +131,6 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   list_rows();
   halo_.exchange(v, Halo::kPositions);
   interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
-  const Layout& L = c_.layout;
-  const int64_t fo = L.tension();
   // What depends on z alone (edges' lengths and directions, triples' and
   // cells' strain gradients and slope factors, particles' contact terms):
   // kept by the diagonal (from settled_cost's pass in Newton's order), or
@@ -145,7 +143,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (fill) {
       const V e = at(z, q) - at(z, p);
-      edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[s], k_slope_[s] / c_.edge_rest[s],
+      edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / c_.edge_rest[s],
                 c_.edge_width[s], ke);
     }
     V out[2];
@@ -160,7 +158,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     if (fill) {
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
-      kept_gradients(c_.triple_width[s] * k_slope_[L.moment() - fo + s] / c_.triple_rest[s], g, 3, kg);
+      kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, 3, kg);
     }
     const V vk[3] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2])};
     V out[3];
@@ -176,7 +174,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       const CellAt a = cell_at(ids, z);
       V g[4];
       shear_cell<double, false>(a.x, g);
-      kept_gradients(c_.shear_area[s] * k_slope_[L.shear() - fo + s], g, 4, kg);
+      kept_gradients(c_.shear_area[s] * k_slope_s_[pos], g, 4, kg);
     }
     const V vk[4] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2]), at(v, ids[3])};
     V out[4];
@@ -234,9 +232,9 @@ void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z, double* ke
   const double len = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s];
   const Band::Stop st = m_.stretch[s & 1].stop(c_.anchor[s], len / L0 - 1);
-  k_tension_[s] = std::max(0.0, st.f);
-  k_slope_[s] = st.df_dq;
-  edge_kept(z + 3 * p, z + 3 * q, len, k_tension_[s], st.df_dq / L0, c_.edge_width[s], ke);
+  k_tension_[pos] = std::max(0.0, st.f);
+  k_slope_e_[pos] = st.df_dq;
+  edge_kept(z + 3 * p, z + 3 * q, len, k_tension_[pos], st.df_dq / L0, c_.edge_width[s], ke);
 }
 
 void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -247,8 +245,8 @@ void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* 
   const double th =
       bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
   const double Lm = c_.triple_rest[s];
-  k_slope_[k] = m_.bend[s & 1].stop(c_.anchor[k], th / Lm).df_dq;
-  kept_gradients(c_.triple_width[s] * k_slope_[k] / Lm, g, 3, kg);
+  k_slope_t_[pos] = m_.bend[s & 1].stop(c_.anchor[k], th / Lm).df_dq;
+  kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / Lm, g, 3, kg);
 }
 
 void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -258,8 +256,8 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
-  k_slope_[k] = m_.shear.stop(c_.anchor[k], phi).df_dq;
-  kept_gradients(c_.shear_area[s] * k_slope_[k], g, 4, kg);
+  k_slope_s_[pos] = m_.shear.stop(c_.anchor[k], phi).df_dq;
+  kept_gradients(c_.shear_area[s] * k_slope_s_[pos], g, 4, kg);
 }
 
 // The diagonal of K: per element and particle, its stiffness block's

@@ -68,8 +68,16 @@ class TimeLoop {
     newton_.release();
   }
 
-  // After AMRC changed the mesh (and the lists were rebuilt).
-  void mesh_changed() { free_ = red_.sum_i64(lists_.particles.size()); }
+  // After AMRC changed the mesh (and the lists were rebuilt): the
+  // evaluator's arrays and Newton's compact vectors grow here, not in the
+  // next step, where the lists outgrew them; with `new_stage` (grid
+  // sequencing's next level) they are sized to the new lists, shrinking too
+  // (Evaluator::fit_to_lists).
+  void mesh_changed(bool new_stage = false) {
+    ev_.fit_to_lists(new_stage);
+    newton_.fit_vectors(ev_);
+    free_ = red_.sum_i64(lists_.particles.size());
+  }
 
   // The bending axis of every triple from the step-start positions x1.
   void freeze_bend_axes();
