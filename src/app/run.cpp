@@ -428,6 +428,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.final_level = sequence_level;
     sum.sequencing = sequencing;
     sum.drag = model.drag;
+    sum.pair_builds = loop.evaluator().self_contact().builds();
+    sum.pairs_listed = loop.evaluator().self_contact().listed();
     // The final mesh's spacing: the uniform mesh's when sequencing, the finest
     // leaf's with AMRC (every rank holds the whole tree), else the grid's.
     int finest_leaf = sequence_level;

@@ -74,25 +74,29 @@ void SelfContact::cell_of(const double* x, int64_t cell[3]) const {
 
 int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
   const uint64_t h = uint64_t(cx) * 73856093u ^ uint64_t(cy) * 19349663u ^ uint64_t(cz) * 83492791u;
-  return int64_t(h & uint64_t(bucket_start_.size() - 2));
+  return int64_t(h & uint64_t(buckets_ - 1));
 }
 
 // Counting sort of the listed particles by bucket, in list order: serial,
 // one pass, so the hash is the same whatever the thread count.
 void SelfContact::hash_particles(const ActiveList& particles) {
-  std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
-  std::vector<int32_t>& start = bucket_start_;
+  // Buckets for this list's particles (a coarse stage has far fewer than
+  // the grid the arrays were sized for): a power of two, at least twice them.
+  buckets_ = 1;
+  while (buckets_ < 2 * particles.size()) buckets_ *= 2;
+  int32_t* start = bucket_start_.data();
+  std::fill(start, start + buckets_ + 1, 0);
   int64_t cell[3];
   for (int64_t p : particles.items) {
     cell_of(&xb_[3 * p], cell);
     ++start[bucket_of(cell[0], cell[1], cell[2]) + 1];
   }
-  for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+  for (int64_t b = 1; b <= buckets_; ++b) start[b] += start[b - 1];
   for (int64_t p : particles.items) {
     cell_of(&xb_[3 * p], cell);
     bucket_items_[start[bucket_of(cell[0], cell[1], cell[2])]++] = int32_t(p);
   }
-  for (size_t b = start.size() - 1; b > 0; --b) start[b] = start[b - 1];  // back to each bucket's start
+  for (int64_t b = buckets_; b > 0; --b) start[b] = start[b - 1];  // back to each bucket's start
   start[0] = 0;
 }
 
@@ -126,7 +130,10 @@ void SelfContact::candidates(const Cloth& c, int64_t p, F&& f) const {
 void SelfContact::build(const Cloth& c, const ActiveList& particles, const double* x) {
   const int64_t n = particles.size();
   const int64_t* items = particles.items.data();
-  std::fill(count_.begin(), count_.end(), 0);
+  // A particle outside the list has no partners: cleared when the list
+  // changes (the listed ones are all written below).
+  if (stamp_ != counted_stamp_) std::fill(count_.begin(), count_.end(), 0);
+  counted_stamp_ = stamp_;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k)
     for (int i = 0; i < 3; ++i) xb_[3 * items[k] + i] = x[3 * items[k] + i];

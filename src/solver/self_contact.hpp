@@ -42,7 +42,7 @@ class SelfContact {
   // Calls f(q) for each of p's listed partners, ascending global id.
   template <class F>
   void for_partners(int64_t p, F&& f) const {
-    if (count_.empty()) return;
+    if (listed_ == 0) return;  // no pairs at all (no cache line of the per-particle arrays read)
     const int32_t* q = ids_.data() + first_[p];
     for (int k = 0; k < count_[p]; ++k) f(int64_t(q[k]));
   }
@@ -96,7 +96,8 @@ class SelfContact {
 
   Contact contact_;
   double dist_ = 0, reach_ = 0, exclude2_ = 0;
-  uint64_t stamp_ = 0, builds_ = 0;
+  uint64_t stamp_ = 0, counted_stamp_ = 0, builds_ = 0;
+  int64_t buckets_ = 1;             // the last build's bucket count (a power of two)
   int64_t listed_ = 0;
   std::vector<double> xb_;          // positions of the last build, 3 per grid particle
   std::vector<int64_t> first_;      // per grid particle: its partners' offset in ids_
