@@ -525,6 +525,24 @@ TEST(CliBad, MultigridOnTwoRanks) {
   EXPECT_FALSE(fs::exists(outdir));
 }
 
+// Self-contact runs on one rank (a partner may lie beyond the ghost ring):
+// two are refused with one message, exit 2 and no output directory.
+TEST(CliBad, SelfContactOnTwoRanks) {
+  const fs::path outdir = tmp_dir() / "self-ranks-out";
+  const fs::path err = tmp_dir() / "self-ranks.stderr";
+  const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) +
+                          " --set 'cloth.particles=[17,17]' --set solver.self_contact=true --output " +
+                          sh(outdir.string()) + " </dev/null >/dev/null 2>" + sh(err.string());
+  const int rc = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
+  const std::string text = slurp(err);
+  size_t ours = 0;
+  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
+  EXPECT_EQ(ours, 1u) << text;
+  EXPECT_NE(text.find("solver.self_contact = true runs on one rank only"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(outdir));
+}
+
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a
 // combination the program cannot run are refused before anything is written.
 TEST(CliBad, CheckpointAndAmrcKeys) {
@@ -545,6 +563,12 @@ TEST(CliBad, CheckpointAndAmrcKeys) {
       {"key_amrc_numeric", {"--set", "cloth.particles=[9,9]", "--set", "amrc.enabled=true", "--set",
                             "solver.gradient=numeric"},
        {"amrc.enabled", "analytic"}},
+      {"key_self_amrc", {"--set", "cloth.particles=[9,9]", "--set", "amrc.enabled=true", "--set",
+                         "solver.self_contact=true"},
+       {"solver.self_contact", "amrc.enabled = false"}},
+      {"key_self_numeric", {"--set", "cloth.particles=[9,9]", "--set", "solver.self_contact=true", "--set",
+                            "solver.gradient=numeric"},
+       {"solver.self_contact", "analytic"}},
   });
 }
 
@@ -581,6 +605,7 @@ TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
   EXPECT_EQ(report_field(j, "method"), "\"newton\"");
   EXPECT_EQ(report_field(j, "preconditioner"), "\"jacobi\"");
   EXPECT_EQ(report_field(j, "drag"), "10");
+  EXPECT_EQ(report_field(j, "pair_builds"), "0");  // self-contact off: no pair list
   EXPECT_EQ(report_field(j, "stage_drag"), "10");
   EXPECT_EQ(report_field(j, "particles_solved"), "1089");
   EXPECT_EQ(report_field(j, "final_spacing"), "0.03125");

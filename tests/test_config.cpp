@@ -98,6 +98,7 @@ std::vector<std::string> differences(const Scene& a, const Scene& b) {
   differ(same(av.damping, bv.damping), "solver.damping");
   differ(same(av.rest_speed, bv.rest_speed), "solver.rest_speed");
   differ(same(av.contact_thickness, bv.contact_thickness), "solver.contact_thickness");
+  differ(av.self_contact == bv.self_contact, "solver.self_contact");
   differ(same(av.memory, bv.memory), "solver.memory");
   differ(same(av.drag, bv.drag), "solver.drag");
   differ(same(av.wall_limit, bv.wall_limit), "solver.wall_limit");
@@ -252,6 +253,7 @@ TEST(Config, EveryFieldIsCompared) {
       {"solver.damping", "0.1"},
       {"solver.rest_speed", "0.02"},
       {"solver.contact_thickness", "0.001"},
+      {"solver.self_contact", "true"},
       {"solver.memory", "0.5"},
       {"solver.drag", "1.0"},
       {"solver.wall_limit", "60.0"},

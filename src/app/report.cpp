@@ -101,6 +101,11 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("preconditioner", preconditioner_name(scene.solver));
   j.value("drag", s.drag);
   j.value("stage_drag", s.sequencing ? scene.amrc.stage_drag : 0.0);
+  j.begin_object("self_contact")
+      .value("on", scene.solver.self_contact)
+      .value("pair_builds", (long long)s.pair_builds)
+      .value("pairs_listed", (long long)s.pairs_listed)
+      .end_object();
   j.value("particles_solved", (long long)free_particles);
   j.value("final_spacing", s.final_spacing);
   j.begin_object("particles_active")

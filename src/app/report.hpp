@@ -76,6 +76,8 @@ struct Summary {
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
+  uint64_t pair_builds = 0;   // self-contact: times the pair list was built
+  int64_t pairs_listed = 0;   // self-contact: pairs in the last list (each counted at both particles)
   double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
                               // (with AMRC, the finest leaf's)
   int64_t peak_rss = 0;             // bytes: the largest of the ranks' peak resident sets

@@ -147,6 +147,15 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
   if (ranks > 1 && scene.solver.gradient == GradientMode::Numeric)
     throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
                      "reach beyond the ghost particles); run it without mpirun");
+  if (scene.solver.self_contact && scene.amrc.enabled)
+    throw InputError("solver.self_contact = true needs amrc.enabled = false (a coarse leaf's particles lie "
+                     "further apart than the pair distance: the cloth would pass between them)");
+  if (scene.solver.self_contact && scene.solver.gradient == GradientMode::Numeric)
+    throw InputError("solver.self_contact = true needs solver.gradient = \"analytic\" (the difference "
+                     "windows do not reach a particle's contact partners)");
+  if (ranks > 1 && scene.solver.self_contact)
+    throw InputError("solver.self_contact = true runs on one rank only (a partner may lie on another rank "
+                     "beyond the ghost ring); run it without mpirun");
   if (ranks > 1 && scene.solver.preconditioner == Preconditioner::Multigrid)
     throw InputError("solver.preconditioner = \"multigrid\" runs on one rank only (its levels are not "
                      "split over ranks yet); run it without mpirun or use \"jacobi\"");
@@ -425,6 +434,8 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
     sum.final_level = sequence_level;
     sum.sequencing = sequencing;
     sum.drag = model.drag;
+    sum.pair_builds = loop.evaluator().self_contact().builds();
+    sum.pairs_listed = loop.evaluator().self_contact().listed();
     // The final mesh's spacing: the uniform mesh's when sequencing, the finest
     // leaf's with AMRC (every rank holds the whole tree), else the grid's.
     int finest_leaf = sequence_level;

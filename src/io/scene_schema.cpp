@@ -98,6 +98,11 @@ void declare_solver(ParameterList& list) {
            "time); 0: never at rest")
       .add("contact_thickness", &SolverSpec::contact_thickness, "m", non_negative().with_note("0: automatic"),
            "m; 0 = automatic", "the contact layer; 0: half the grid spacing (a coarse mesh of grid sequencing: half its cell diagonal), or half the fabric's thickness if larger")
+      .add("self_contact", &SolverSpec::self_contact, "", any(),
+           "cloth-cloth contact (one rank, no AMRC)",
+           "cloth-cloth contact: two particles that are not mesh neighbours keep twice the contact layer "
+           "apart ([design.md §1](design.md#1-the-cloth-model)); one rank, `amrc.enabled = false`, "
+           "`solver.gradient = \"analytic\"`")
       .add("memory", &SolverSpec::memory, "", non_negative(), "weight of the force memory (hysteresis) term",
            "weight of the memory term that pulls each force to its hysteresis target")
       .add("drag", &SolverSpec::drag, "1/s", non_negative(), "1/s: air drag, a force -drag*m*v on each particle",

@@ -106,6 +106,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
     }
     friction_block(m_.contact, k_z_ + 3 * p, &c_.x1[3 * p], blk);
     columns(p, w, blk);
+    if (m_.self_contact) self_.blocks(p, k_z_, [&](int64_t q, const double* b) { columns(q, w, b); });
     const int32_t* at = g.at;
     for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
       for (int k = 0; k < 2; ++k)
@@ -165,7 +166,9 @@ void Evaluator::assemble_stiffness(BlockMatrix& K) {
     throw std::logic_error("Evaluator::assemble_stiffness: needs stiffness_diagonal's kept numbers");
   assembly_maps();
   const int64_t rows = lists_.particles.size();
-  if (!asm_pattern_ || K.rows != rows) {  // the columns change with the lists only
+  // The columns change with the lists and self-contact's pairs only.
+  if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds()) {
+    asm_pairs_ = self_.builds();
     std::vector<std::vector<int32_t>> cols;
     cols.resize(size_t(rows));
 #pragma omp parallel for schedule(static)

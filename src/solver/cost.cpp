@@ -126,6 +126,7 @@ void Evaluator::memory(MemoryTable& t) const {
             (hx_start_.capacity() + ht_start_.capacity()) * sizeof(int64_t) +
             (hx_.capacity() + ht_.capacity()) * sizeof(HxEntry));
   t.add(o, "numeric gradient's copy of z", zwork_);
+  self_.memory(t);
 }
 
 // ---- the element buffers in list order -----------------------------------
@@ -270,6 +271,7 @@ void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double*
   double fc[3];
   contact_force(m_.contact, x, fc);
   friction_force(m_.contact, x, x1, fc);
+  if (m_.self_contact) self_.add_force(p, z, fc);
   double r[3];
   for (int k = 0; k < 3; ++k)
     r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
@@ -358,6 +360,7 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
+    if (m_.self_contact) self_.add_jtr(p, z, rho_.data(), jtr);
     const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
@@ -402,6 +405,7 @@ CostTerms Evaluator::settled_cost(double* z) {
   // anchors as their owners': no force halo (ranks_agree checks the bits).
   halo_.exchange(z, Halo::kPositions);
   interpolate_hanging(z);
+  refresh_pairs(z);
   const CostTerms cost = cost_pass(z, z);
   settled_ = keep_;  // the elements' kept numbers are z's now (the particles' are not)
   kg_ready_ = false;
@@ -434,6 +438,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   if (grad) size_slopes();
+  refresh_pairs(z);
   const CostTerms cost = cost_pass(z, nullptr);
   if (!grad) return cost;
   halo_.exchange_particles(rho_.data(), 3);
@@ -514,6 +519,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   list_rows();
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
+  refresh_pairs(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
@@ -586,6 +592,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     slope += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
+    if (m_.self_contact) slope += self_.slope_sum(p, z) / 3;
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather_listed(rows_[pos], [&](const double* v) { dsum += v[0]; });

@@ -23,6 +23,7 @@
 #include "solver/memory_table.hpp"
 #include "solver/model.hpp"
 #include "solver/reducer.hpp"
+#include "solver/self_contact.hpp"
 
 namespace drape {
 
@@ -123,6 +124,8 @@ class Evaluator {
   // The rows' capacity: free and hanging particles the arrays have room for
   // (the Newton solver's compact vectors follow it).
   size_t row_capacity() const { return rows_.capacity(); }
+  // Cloth-cloth contact's pair list (Model::self_contact).
+  const SelfContact& self_contact() const { return self_; }
   // Its arrays' capacities.
   void memory(MemoryTable& t) const;
   // Puts AMRC's hanging particles (3 values per particle in x) on their
@@ -320,7 +323,7 @@ class Evaluator {
   std::vector<int32_t> asm_index_, asm_hang_;
   std::vector<int64_t> hx_start_, ht_start_;
   std::vector<HxEntry> hx_, ht_;
-  uint64_t asm_stamp_ = 0;
+  uint64_t asm_stamp_ = 0, asm_pairs_ = 0;
   size_t asm_hanging_ = 0;
   bool asm_pattern_ = false;
   uint64_t rows_stamp_ = 0;
@@ -328,6 +331,12 @@ class Evaluator {
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
+  // Self-contact's pairs, made to hold at z by every entry point that
+  // starts at a new z (evaluate, settled_cost, both diagonals).
+  SelfContact self_;
+  void refresh_pairs(const double* z) {
+    if (m_.self_contact) self_.refresh(c_, lists_.particles, lists_.stamp, m_.contact, z);
+  }
 };
 
 // The element buffer entries particle p gathers, always in the same order:

@@ -20,6 +20,7 @@ struct Model {
   double force_scale = 1;            // F0: residual forces are measured in F0 (a particle's weight)
   double memory = 1.0;               // weight of the force memory term
   double drag = 0.0;                 // 1/s: air drag, a force -drag*m*v on each particle
+  bool self_contact = false;         // cloth-cloth contact (solver/self_contact.hpp)
   // Term switches (tests check each term's gradient alone).
   bool use_newton = true, use_stretch = true, use_bend = true, use_shear = true;
 

@@ -44,6 +44,10 @@ void NewtonSolver::memory(MemoryTable& t) const {
 namespace {
 // What the levels' point sets follow: the lists and their hanging particles.
 uint64_t lists_stamp(const ActiveLists& l) { return l.stamp ^ (uint64_t(l.hanging.size()) << 48); }
+// K's pattern changes with the lists and with self-contact's pair list.
+uint64_t pattern_stamp(const Evaluator& ev) {
+  return lists_stamp(ev.lists()) ^ (ev.self_contact().builds() << 24);
+}
 }  // namespace
 
 // K assembled at z and the levels over it. The compact vectors number the
@@ -51,7 +55,7 @@ uint64_t lists_stamp(const ActiveLists& l) { return l.stamp ^ (uint64_t(l.hangin
 // assembled rows' order, checked when the lists change.
 void NewtonSolver::setup_multigrid(Evaluator& ev) {
   const ActiveLists& lists = ev.lists();
-  const uint64_t stamp = lists_stamp(lists);
+  const uint64_t stamp = pattern_stamp(ev);
   if (ids_.size() != size_t(lists.particles.size()) || stamp != mg_stamp_) {
     ids_.assign(lists.particles.items.begin(), lists.particles.items.end());
     bool same = true;
@@ -72,7 +76,7 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
 // changed, and when the last solve took more than twice the iterations of
 // the first solve on this build.
 bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
-  return mg_solves_ == 0 || lists_stamp(ev.lists()) != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
+  return mg_solves_ == 0 || pattern_stamp(ev) != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
 }
 
 // Preconditioned CG for K d = -rho. Its vectors are compact: the free

@@ -66,6 +66,7 @@ Model make_model(const Scene& scene, const Fabric& fabric, double hi, double hj)
   m.dt = m.dt_prev = scene.solver.dt;
   m.memory = scene.solver.memory;
   m.drag = scene.solver.drag;
+  m.self_contact = scene.solver.self_contact;
   return m;
 }
 

@@ -201,6 +201,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
     }
     add_friction_product(p, z, vp, out);
+    if (m_.self_contact) self_.add_product(p, z, v, out);
     gather_listed(rows_[pos], [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
@@ -269,6 +270,7 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // but itself.
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   list_rows();
+  refresh_pairs(z);
   k_z_ = z;
   const bool settled = settled_;
   auto edge = [&](int64_t s, int64_t pos) {
@@ -302,6 +304,7 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     const double* kc = contact_at(p, size_t(pos), mine);
     double dsum = kc[5] + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
+    if (m_.self_contact) dsum += self_.slope_sum(p, z) / 3;
     gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
     for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
   };

@@ -1,0 +1,226 @@
+#include "solver/self_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drape {
+
+namespace {
+// Partners reserved per particle at the first build; a list that outgrows
+// it grows by half (the only allocation after the first build).
+constexpr int64_t kReservedPartners = 4;
+}  // namespace
+
+void SelfContact::size_arrays(int64_t n) {
+  if (int64_t(count_.size()) == n) return;
+  xb_.assign(3 * n, 0.0);
+  first_.assign(n, 0);
+  count_.assign(n, 0);
+  ids_.assign(kReservedPartners * n, 0);
+  int64_t buckets = 1;
+  while (buckets < 2 * n) buckets *= 2;  // a power of two: the hash masks
+  bucket_start_.assign(buckets + 1, 0);
+  bucket_items_.assign(n, 0);
+}
+
+void SelfContact::memory(MemoryTable& t) const {
+  const char* o = "SelfContact";
+  t.add(o, "build positions", xb_);
+  t.add(o, "partner offsets and counts", first_.capacity() * sizeof(int64_t) + count_.capacity() * sizeof(int32_t));
+  t.add(o, "partners", ids_);
+  t.add(o, "spatial hash", (bucket_start_.capacity() + bucket_items_.capacity()) * sizeof(int32_t));
+}
+
+bool SelfContact::refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact,
+                          const double* x) {
+  size_arrays(c.grid.n());
+  const bool same_layer = contact.thickness == contact_.thickness && contact.stiffness == contact_.stiffness;
+  if (builds_ > 0 && stamp == stamp_ && same_layer && still_holds(c, particles, x)) return false;
+  contact_ = contact;
+  stamp_ = stamp;
+  dist_ = 2 * contact.thickness;
+  reach_ = 2 * dist_;
+  // Mesh neighbours within reach at rest are held apart by the elements:
+  // a fold brings them within D only if it is tighter than the layer.
+  exclude2_ = reach_ * reach_ * (1 + 1e-9);
+  build(c, particles, x);
+  ++builds_;
+  return true;
+}
+
+// Whether every listed particle is within reach/4 of where the last build
+// saw it (max over particles: exact in any order).
+bool SelfContact::still_holds(const Cloth&, const ActiveList& particles, const double* x) const {
+  const int64_t n = particles.size();
+  const int64_t* items = particles.items.data();
+  double worst = 0;
+#pragma omp parallel for schedule(static) reduction(max : worst)
+  for (int64_t k = 0; k < n; ++k) {
+    const int64_t p = items[k];
+    double d2 = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double u = x[3 * p + i] - xb_[3 * p + i];
+      d2 += u * u;
+    }
+    worst = std::max(worst, d2);
+  }
+  const double limit = 0.25 * reach_;
+  return worst <= limit * limit;
+}
+
+void SelfContact::cell_of(const double* x, int64_t cell[3]) const {
+  for (int i = 0; i < 3; ++i) cell[i] = int64_t(std::floor(x[i] / reach_));
+}
+
+int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
+  const uint64_t h = uint64_t(cx) * 73856093u ^ uint64_t(cy) * 19349663u ^ uint64_t(cz) * 83492791u;
+  return int64_t(h & uint64_t(buckets_ - 1));
+}
+
+// Counting sort of the listed particles by bucket, in list order: serial,
+// one pass, so the hash is the same whatever the thread count.
+void SelfContact::hash_particles(const ActiveList& particles) {
+  // Buckets for this list's particles (a coarse stage has far fewer than
+  // the grid the arrays were sized for): a power of two, at least twice them.
+  buckets_ = 1;
+  while (buckets_ < 2 * particles.size()) buckets_ *= 2;
+  int32_t* start = bucket_start_.data();
+  std::fill(start, start + buckets_ + 1, 0);
+  int64_t cell[3];
+  for (int64_t p : particles.items) {
+    cell_of(&xb_[3 * p], cell);
+    ++start[bucket_of(cell[0], cell[1], cell[2]) + 1];
+  }
+  for (int64_t b = 1; b <= buckets_; ++b) start[b] += start[b - 1];
+  for (int64_t p : particles.items) {
+    cell_of(&xb_[3 * p], cell);
+    bucket_items_[start[bucket_of(cell[0], cell[1], cell[2])]++] = int32_t(p);
+  }
+  for (int64_t b = buckets_; b > 0; --b) start[b] = start[b - 1];  // back to each bucket's start
+  start[0] = 0;
+}
+
+template <class F>
+void SelfContact::candidates(const Cloth& c, int64_t p, F&& f) const {
+  const Grid& g = c.grid;
+  const double* xp = &xb_[3 * p];
+  int64_t home[3], at[3];
+  cell_of(xp, home);
+  const int ip = g.i_of(p), jp = g.j_of(p);
+  for (int64_t a = -1; a <= 1; ++a)
+    for (int64_t b = -1; b <= 1; ++b)
+      for (int64_t e = -1; e <= 1; ++e) {
+        const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
+        const int64_t k = bucket_of(cx, cy, cz);
+        for (int32_t s = bucket_start_[k]; s < bucket_start_[k + 1]; ++s) {
+          const int64_t q = bucket_items_[s];
+          if (q == p) continue;
+          const double* xq = &xb_[3 * q];
+          cell_of(xq, at);
+          if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
+          const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
+          if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
+          double d2 = 0;
+          for (int i = 0; i < 3; ++i) d2 += (xq[i] - xp[i]) * (xq[i] - xp[i]);
+          if (d2 < reach_ * reach_) f(q);
+        }
+      }
+}
+
+void SelfContact::build(const Cloth& c, const ActiveList& particles, const double* x) {
+  const int64_t n = particles.size();
+  const int64_t* items = particles.items.data();
+  // A particle outside the list has no partners: cleared when the list
+  // changes (the listed ones are all written below).
+  if (stamp_ != counted_stamp_) std::fill(count_.begin(), count_.end(), 0);
+  counted_stamp_ = stamp_;
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < n; ++k)
+    for (int i = 0; i < 3; ++i) xb_[3 * items[k] + i] = x[3 * items[k] + i];
+  hash_particles(particles);
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < n; ++k) {
+    int32_t m = 0;
+    candidates(c, items[k], [&](int64_t) { ++m; });
+    count_[items[k]] = m;
+  }
+  int64_t total = 0;
+  for (int64_t k = 0; k < n; ++k) {
+    first_[items[k]] = total;
+    total += count_[items[k]];
+  }
+  if (total > int64_t(ids_.size())) ids_.resize(size_t(total + total / 2));
+  listed_ = total;
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < n; ++k) {
+    const int64_t p = items[k];
+    int32_t* out = ids_.data() + first_[p];
+    int32_t m = 0;
+    candidates(c, p, [&](int64_t q) { out[m++] = int32_t(q); });
+    std::sort(out, out + m);  // the gather's fixed order: ascending global id
+  }
+}
+
+bool SelfContact::term(const double* x, int64_t p, int64_t q, PairTerm& t) const {
+  const double* xp = x + 3 * p;
+  const double* xq = x + 3 * q;
+  double u[3], d2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    u[i] = xp[i] - xq[i];
+    d2 += u[i] * u[i];
+  }
+  if (!(d2 < dist_ * dist_)) return false;
+  const double d = std::sqrt(d2);
+  if (d > 0) {
+    for (int i = 0; i < 3; ++i) t.n[i] = u[i] / d;
+  } else {  // on one point: apart along z, the lower id upwards (antisymmetric)
+    t.n[0] = t.n[1] = 0;
+    t.n[2] = p < q ? 1.0 : -1.0;
+  }
+  t.d = d;
+  t.f = penalty(contact_, dist_ - d, &t.slope);
+  return true;
+}
+
+void SelfContact::add_force(int64_t p, const double* x, double* f) const {
+  for_partners(p, [&](int64_t q) {
+    PairTerm t;
+    if (!term(x, p, q, t)) return;
+    for (int i = 0; i < 3; ++i) f[i] += t.f * t.n[i];
+  });
+}
+
+// dF_p/dx_p = J = -slope n n^T + (f/d)(I - n n^T) and dF_q/dx_p = -J, so the
+// gradient's part at p is -J (r_p - r_q).
+void SelfContact::add_jtr(int64_t p, const double* x, const double* r, double* jtr) const {
+  for_partners(p, [&](int64_t q) {
+    PairTerm t;
+    if (!term(x, p, q, t)) return;
+    double dr[3];
+    for (int i = 0; i < 3; ++i) dr[i] = r[3 * p + i] - r[3 * q + i];
+    const double nr = t.n[0] * dr[0] + t.n[1] * dr[1] + t.n[2] * dr[2];
+    const double bend = t.d > 0 ? t.f / t.d : 0.0;
+    for (int i = 0; i < 3; ++i) jtr[i] += t.slope * t.n[i] * nr - bend * (dr[i] - t.n[i] * nr);
+  });
+}
+
+void SelfContact::add_product(int64_t p, const double* x, const double* v, double* out) const {
+  for_partners(p, [&](int64_t q) {
+    PairTerm t;
+    if (!term(x, p, q, t)) return;
+    double nv = 0;
+    for (int i = 0; i < 3; ++i) nv += t.n[i] * (v[3 * p + i] - v[3 * q + i]);
+    for (int i = 0; i < 3; ++i) out[i] += t.slope * nv * t.n[i];
+  });
+}
+
+double SelfContact::slope_sum(int64_t p, const double* x) const {
+  double s = 0;
+  for_partners(p, [&](int64_t q) {
+    PairTerm t;
+    if (term(x, p, q, t)) s += t.slope;
+  });
+  return s;
+}
+
+}  // namespace drape

@@ -1,0 +1,109 @@
+#pragma once
+// Cloth-cloth contact (docs/design.md §1, Self-contact): two free particles
+// that are not mesh neighbours and come closer than the pair distance
+// D = 2 delta (each particle keeps the obstacles' contact layer delta about
+// itself) are pushed apart along the line joining them, with the obstacles'
+// penalty shape and stiffness over the layer D:
+//   F_p = phi(D - d) n,  n = (x_p - x_q)/d,  F_q = -F_p.
+// Pairs are found by a spatial hash from the positions of the last build,
+// reaching out to 2D, and the list is rebuilt only once a particle has moved
+// more than D/2 from where it was then: every pair closer than D now was
+// closer than 2D then, so the list always holds every pair that acts, and
+// the forces do not depend on when it was built (pairs beyond D add nothing).
+// Each particle keeps its partners sorted by global id and gathers its own
+// pair terms in that order: the same sums on any thread count (gather, never
+// scatter).
+#include <cstdint>
+#include <vector>
+
+#include "mesh/active_lists.hpp"
+#include "mesh/cloth.hpp"
+#include "solver/contact.hpp"
+#include "solver/memory_table.hpp"
+
+namespace drape {
+
+// One pair's term at p: the force on p is f n; slope = df/dpenetration.
+struct PairTerm {
+  double n[3];
+  double f = 0, slope = 0, d = 0;
+};
+
+class SelfContact {
+ public:
+  // Makes the pair list hold at positions x (free particles of `particles`):
+  // rebuilt when the lists, the contact layer or its stiffness changed, or a
+  // particle moved more than a quarter of the search reach since the last
+  // build. Returns true if it rebuilt. Sizes its arrays at the first call.
+  bool refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact, const double* x);
+
+  // The pair distance D (0 before the first refresh).
+  double distance() const { return dist_; }
+  // Calls f(q) for each of p's listed partners, ascending global id.
+  template <class F>
+  void for_partners(int64_t p, F&& f) const {
+    if (listed_ == 0) return;  // no pairs at all (no cache line of the per-particle arrays read)
+    const int32_t* q = ids_.data() + first_[p];
+    for (int k = 0; k < count_[p]; ++k) f(int64_t(q[k]));
+  }
+  // The term of pair (p, q) at positions x; false (t untouched) when apart.
+  bool term(const double* x, int64_t p, int64_t q, PairTerm& t) const;
+
+  // Adds the pairs' force on p to f.
+  void add_force(int64_t p, const double* x, double* f) const;
+  // Adds -(dF/dx_p)^T r over the residuals of p and its partners (r: 3 per
+  // particle): the self-contact part of the Newton cost's gradient at p.
+  void add_jtr(int64_t p, const double* x, const double* r, double* jtr) const;
+  // K's part at p (its positive semi-definite normal term): sum over pairs
+  // of slope n n^T (v_p - v_q), added to out.
+  void add_product(int64_t p, const double* x, const double* v, double* out) const;
+  // Sum of the pairs' slopes at p (the trace of K's diagonal block).
+  double slope_sum(int64_t p, const double* x) const;
+  // K's blocks of row p: block(q, b) with b = slope n n^T for q = p and -b
+  // for each partner q (every listed partner: a zero block when apart, so
+  // the pattern changes with the list only).
+  template <class Block>
+  void blocks(int64_t p, const double* x, Block&& block) const {
+    for_partners(p, [&](int64_t q) {
+      PairTerm t;
+      double b[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+      if (term(x, p, q, t))
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) b[3 * i + j] = t.slope * t.n[i] * t.n[j];
+      block(p, b);
+      for (double& v : b) v = -v;
+      block(q, b);
+    });
+  }
+
+  // Counts: builds so far (a stamp for assembled patterns), listed pairs
+  // (each once per particle) of the last build.
+  uint64_t builds() const { return builds_; }
+  int64_t listed() const { return listed_; }
+  void memory(MemoryTable& t) const;
+
+ private:
+  void size_arrays(int64_t n);
+  bool still_holds(const Cloth& c, const ActiveList& particles, const double* x) const;
+  void build(const Cloth& c, const ActiveList& particles, const double* x);
+  void hash_particles(const ActiveList& particles);
+  // Calls f(q) for each particle q != p within the search reach of p at the
+  // build's positions and not excluded as p's mesh neighbour.
+  template <class F>
+  void candidates(const Cloth& c, int64_t p, F&& f) const;
+  int64_t bucket_of(int64_t cx, int64_t cy, int64_t cz) const;
+  void cell_of(const double* x, int64_t cell[3]) const;
+
+  Contact contact_;
+  double dist_ = 0, reach_ = 0, exclude2_ = 0;
+  uint64_t stamp_ = 0, counted_stamp_ = 0, builds_ = 0;
+  int64_t buckets_ = 1;             // the last build's bucket count (a power of two)
+  int64_t listed_ = 0;
+  std::vector<double> xb_;          // positions of the last build, 3 per grid particle
+  std::vector<int64_t> first_;      // per grid particle: its partners' offset in ids_
+  std::vector<int32_t> count_;      // per grid particle: its partners (0 for any unlisted)
+  std::vector<int32_t> ids_;        // partners, each particle's ascending
+  std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: particles by bucket, list order
+};
+
+}  // namespace drape
