@@ -557,6 +557,16 @@ TEST(GridSequence, StartLevelFromTheSpacing) {
   EXPECT_EQ(level(17, 1.0, 10.0), 1);    // 16 intervals: 8 per side at level 1, no further
 }
 
+// The next finer mesh's wall time: 4 times the last stage's at least, more
+// when the last refinement grew the time more (the default run: 23 s on
+// level 5, 99 s on level 4, so the 127 x 127 mesh needs over 4.3 x 99 s).
+TEST(GridSequence, NextStageGrowsAsTheLastRefinementDid) {
+  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 0), 40);    // the first stage: particles alone
+  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 5), 40);    // grew 2x: still 4 times the particles
+  EXPECT_DOUBLE_EQ(next_stage_seconds(99, 23), 99 * (99 / 23.0));
+  EXPECT_GT(next_stage_seconds(99, 23), 418);         // what the default run had left
+}
+
 
 // A split's stretched edges: eased to 1 % strain, the others untouched, and
 // back at the material's rest length after strain / rate seconds, no sooner.

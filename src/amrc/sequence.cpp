@@ -15,6 +15,11 @@ int sequence_start_level(const Grid& g, double spacing) {
   return level;
 }
 
+double next_stage_seconds(double last, double before) {
+  const double growth = before > 0 ? last / before : 0;
+  return last * std::max(4.0, growth);
+}
+
 namespace {
 
 // Eased edges keep this much strain: the tension of a cloth hanging under

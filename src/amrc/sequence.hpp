@@ -16,6 +16,12 @@ namespace drape {
 // 0 (start on the finest mesh) when spacing is 0 or below the grid's.
 int sequence_start_level(const Grid& g, double spacing);
 
+// The wall time the next finer mesh will take, from the last two stages'
+// (`before` 0: none yet): at least 4 times the last (4 times the particles),
+// and the growth the last refinement showed when larger (the time steps'
+// work per particle grows as the spacing shrinks, e.g. Jacobi's iterations).
+double next_stage_seconds(double last, double before);
+
 }  // namespace drape
 
 namespace drape {

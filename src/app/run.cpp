@@ -370,20 +370,25 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
                     "edges eased from up to %.1f %% strain\n",
                     cloth.step, cloth.time, sequence_level, (long long)sum.active_final, 100 * eased);
     };
-    // A finer mesh costs at least 4 times this one (4 times the particles):
-    // when the wall budget left would not cover that, the run ends here, at
-    // rest on this mesh, rather than out of time on the next one mid-motion.
+    // When the wall budget left would not cover the next finer mesh
+    // (next_stage_seconds), the run ends here, at rest on this mesh, rather
+    // than out of time on the next one mid-motion.
     auto stage_start = std::chrono::steady_clock::now();
+    double stage_before = 0;  // the previous stage's wall seconds
     auto finer_mesh_fits = [&] {
       const auto now = std::chrono::steady_clock::now();
       const double stage = std::chrono::duration<double>(now - stage_start).count();
+      const double next = next_stage_seconds(stage, stage_before);
       const double left = scene.solver.wall_limit - std::chrono::duration<double>(now - t0).count();
-      const bool fits = root_decides(comm, scene.solver.wall_limit <= 0 || 4 * stage < left);
-      if (fits) stage_start = now;
-      else if (talk)
+      const bool fits = root_decides(comm, scene.solver.wall_limit <= 0 || next < left);
+      if (fits) {
+        stage_start = now;
+        stage_before = stage;
+      } else if (talk) {
         std::printf("at rest after step %d (t = %.4g s) on level %d: the next finer mesh would take "
                     "about %.0f s of the %.0f s left (solver.wall_limit): ending here\n",
-                    cloth.step, cloth.time, sequence_level, 4 * stage, left);
+                    cloth.step, cloth.time, sequence_level, next, left);
+      }
       sum.sequence_cut_short = !fits;
       return fits;
     };
