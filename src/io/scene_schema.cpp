@@ -170,7 +170,9 @@ void declare_amrc(ParameterList& list) {
       .add("stage_drag", &AmrcSpec::stage_drag, "1/s", non_negative().with_note("1/s"),
            "1/s: air drag on every mesh while grid sequencing",
            "air drag on every mesh while grid sequencing (the meshes lead to the rest state, and drag "
-           "vanishes at rest); `report.json` `stage_drag`");
+           "vanishes at rest, but with the hysteresis bands the rest state remembers the path the drag "
+           "damped: [performance.md](performance.md#what-limits-dt-in-the-time-loop)); `report.json` "
+           "`stage_drag`");
 }
 
 ParameterList declare() {
