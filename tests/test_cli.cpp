@@ -488,59 +488,39 @@ TEST(CliBad, Checkpoint) {
   EXPECT_EQ(snapshot(good.parent_path()), before);
 }
 
-// MPI settings: more ranks than tiles is refused on rank 0 alone, with
-// exit 2 from every rank, and no output directory.
+// A run on 2 ranks refused on rank 0 alone: exit 2 from every rank, one
+// message saying `says`, and no output directory.
+void expect_refused_on_two_ranks(const std::string& label, const std::string& sets, const std::string& says) {
+  const fs::path outdir = tmp_dir() / (label + "-out");
+  const fs::path err = tmp_dir() / (label + ".stderr");
+  const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) + " " + sets +
+                          " --output " + sh(outdir.string()) + " </dev/null >/dev/null 2>" + sh(err.string());
+  const int rc = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
+  const std::string text = slurp(err);
+  size_t ours = 0;
+  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
+  EXPECT_EQ(ours, 1u) << text;
+  EXPECT_NE(text.find(says), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(outdir));
+}
+
+// MPI settings: more ranks than tiles.
 TEST(CliBad, MoreRanksThanTiles) {
-  const fs::path outdir = tmp_dir() / "ranks-out";
-  const fs::path err = tmp_dir() / "ranks.stderr";
-  const std::string cmd = clean_env() + " " + sh(MPIEXEC) +
-                          " -n 2 " + sh(DRAPE_BINARY) +
-                          " --set 'cloth.particles=[8,8]' --set cloth.tile=8 --output " + sh(outdir.string()) +
-                          " </dev/null >/dev/null 2>" + sh(err.string());
-  const int rc = std::system(cmd.c_str());
-  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
-  const std::string text = slurp(err);
-  size_t ours = 0;
-  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
-  EXPECT_EQ(ours, 1u) << text;
-  EXPECT_NE(text.find("2 ranks but the cloth has only 1 tile(s)"), std::string::npos) << text;
-  EXPECT_FALSE(fs::exists(outdir));
+  expect_refused_on_two_ranks("ranks", "--set 'cloth.particles=[8,8]' --set cloth.tile=8",
+                              "2 ranks but the cloth has only 1 tile(s)");
 }
 
-// The multigrid preconditioner runs on one rank: two are refused with one
-// message, exit 2 and no output directory.
+// The multigrid preconditioner runs on one rank.
 TEST(CliBad, MultigridOnTwoRanks) {
-  const fs::path outdir = tmp_dir() / "mg-ranks-out";
-  const fs::path err = tmp_dir() / "mg-ranks.stderr";
-  const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) +
-                          " --set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"' --output " +
-                          sh(outdir.string()) + " </dev/null >/dev/null 2>" + sh(err.string());
-  const int rc = std::system(cmd.c_str());
-  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
-  const std::string text = slurp(err);
-  size_t ours = 0;
-  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
-  EXPECT_EQ(ours, 1u) << text;
-  EXPECT_NE(text.find("solver.preconditioner = \"multigrid\" runs on one rank only"), std::string::npos) << text;
-  EXPECT_FALSE(fs::exists(outdir));
+  expect_refused_on_two_ranks("mg-ranks", "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"'",
+                              "solver.preconditioner = \"multigrid\" runs on one rank only");
 }
 
-// Self-contact runs on one rank (a partner may lie beyond the ghost ring):
-// two are refused with one message, exit 2 and no output directory.
+// Self-contact runs on one rank (a partner may lie beyond the ghost ring).
 TEST(CliBad, SelfContactOnTwoRanks) {
-  const fs::path outdir = tmp_dir() / "self-ranks-out";
-  const fs::path err = tmp_dir() / "self-ranks.stderr";
-  const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) +
-                          " --set 'cloth.particles=[17,17]' --set solver.self_contact=true --output " +
-                          sh(outdir.string()) + " </dev/null >/dev/null 2>" + sh(err.string());
-  const int rc = std::system(cmd.c_str());
-  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "status " << rc;
-  const std::string text = slurp(err);
-  size_t ours = 0;
-  for (size_t p = 0; (p = text.find("drape: error: ", p)) != std::string::npos; ++p) ++ours;
-  EXPECT_EQ(ours, 1u) << text;
-  EXPECT_NE(text.find("solver.self_contact = true runs on one rank only"), std::string::npos) << text;
-  EXPECT_FALSE(fs::exists(outdir));
+  expect_refused_on_two_ranks("self-ranks", "--set 'cloth.particles=[17,17]' --set solver.self_contact=true",
+                              "solver.self_contact = true runs on one rank only");
 }
 
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a

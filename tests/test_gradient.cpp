@@ -13,6 +13,7 @@
 #include "amrc/criterion.hpp"
 #include "solver/kernels.hpp"
 #include "solver/multigrid/block_matrix.hpp"
+#include "assembled_check.hpp"
 #include "world.hpp"
 
 namespace drape::test {
@@ -390,36 +391,9 @@ TEST(Stiffness, AssembledMatchesTheProduct) {
     if (friction) {
       ASSERT_GT(with_friction(w), 0);
     }
-    Evaluator& ev = w.loop->evaluator();
-    ev.settled_cost(w.cloth.z.data());
-    const size_t n = w.cloth.z.size();
-    std::vector<double> v(n, 0.0), kv(n, 0.0), diag(n, 0.0);
-    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
-    BlockMatrix A;
-    ev.assemble_stiffness(A);
-    const std::vector<int64_t>& ids = w.lists.particles.items;
-    ASSERT_EQ(A.rows, int64_t(ids.size()));
-    std::mt19937_64 rng(3);
-    std::uniform_real_distribution<double> u(-1, 1);
-    std::vector<double> vc(3 * ids.size()), av(3 * ids.size());
-    for (size_t r = 0; r < ids.size(); ++r)
-      for (int k = 0; k < 3; ++k) v[3 * ids[r] + k] = vc[3 * r + k] = u(rng);
-    ev.stiffness_product(w.cloth.z.data(), v.data(), kv.data());
-    A.multiply(vc.data(), av.data());
-    double scale = 0;
-    for (size_t r = 0; r < ids.size(); ++r)
-      for (int k = 0; k < 3; ++k) scale = std::max(scale, std::fabs(kv[3 * ids[r] + k]));
-    for (size_t r = 0; r < ids.size(); ++r)
-      for (int k = 0; k < 3; ++k)
-        EXPECT_NEAR(av[3 * r + k], kv[3 * ids[r] + k], 1e-12 * scale)
-            << "particle " << ids[r] << " axis " << k << (amrc ? " (AMRC)" : "") << (friction ? " friction" : "");
-    for (int64_t r = 0; r < A.rows; ++r)
-      for (int64_t b = A.start[r]; b < A.start[r + 1]; ++b) {
-        const double* t = A.block(A.col[b], int32_t(r));
-        ASSERT_NE(t, nullptr) << "no block (" << A.col[b] << ", " << r << ")";
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) EXPECT_NEAR(A.val[9 * b + 3 * i + j], t[3 * j + i], 1e-12 * scale);
-      }
+    w.loop->evaluator().settled_cost(w.cloth.z.data());
+    std::vector<double> diag;
+    expect_assembled_is_the_product(w, std::string(amrc ? "AMRC" : "plain") + (friction ? ", friction" : ""), diag);
   }
 }
 
