@@ -1,5 +1,5 @@
 // drape: the program's start. Parses flags, loads and validates the scene and
-// fabric, then hands over to run_simulation(). Exit status: 0 success, 2 bad
+// fabric, then runs the Simulation. Exit status: 0 success, 2 bad
 // input, 3 numerical failure, 1 internal error. Only rank 0 prints, except
 // that an internal error is named by the rank it struck.
 #include <mpi.h>
@@ -10,7 +10,7 @@
 #include <iostream>
 #include <optional>
 
-#include "app/run.hpp"
+#include "app/simulation.hpp"
 #include "app/signals.hpp"
 #include "decomp/collective.hpp"
 #include "io/checkpoint.hpp"
@@ -121,7 +121,11 @@ int main(int argc, char** argv) {
     opt.scene_toml = toml;
     opt.quiet = quiet;
     if (resume) opt.restart = &*resume;
-    const int status = drape::run_simulation(scene, fabric, opt, MPI_COMM_WORLD);
+    int status = 0;
+    {  // its communicators and files closed before MPI_Finalize
+      drape::Simulation sim(scene, fabric, opt, MPI_COMM_WORLD);
+      status = sim.run();
+    }
     MPI_Finalize();
     return status;
   } catch (const drape::InputError& e) {

@@ -1,0 +1,162 @@
+// Setting a simulation up: the one-rank pieces for tests and tools, and the
+// program's run on every rank (checks, restart, the first mesh, tiles over
+// ranks, active lists, the time loop).
+#include "app/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+
+#include "amrc/remesh.hpp"
+#include "amrc/sequence.hpp"
+#include "app/memory.hpp"
+#include "base/error.hpp"
+#include "decomp/collective.hpp"
+#include "mesh/topology.hpp"
+
+namespace drape {
+
+Simulation::Simulation(const Scene& s, const Fabric& f) : scene(s), fabric(f) {
+  cloth = make_cloth(scene, fabric);
+  model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
+  rebuild();
+  progress_.emplace(false, scene.solver.steps);
+}
+
+Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, MPI_Comm comm)
+    : scene(s), fabric(f), comm_(comm), rank_(rank_of(comm)), ranks_(size_of(comm)), opt_(opt) {
+  refuse_unsupported();
+  // Before any allocation the grid sizes and before the output directory.
+  check_memory(scene, comm_);
+  if (scene.parallel.threads > 0) omp_set_num_threads(scene.parallel.threads);
+  threads_ = omp_get_max_threads();
+  talk_ = rank_ == 0 && !opt_.quiet;
+  {
+    ScopedPhase ph(tm_, kSetup);
+    set_up_mesh();
+    set_up_model();
+    tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
+    // refuses more ranks than tiles
+    dec_ = decompose(cloth, tiling, comm_, ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0));
+  }
+  make_output_dir();
+  rebuild_lists();
+  sum_.active_min = sum_.active_max = sum_.active_final = active_particles(cloth);
+  if (sequence_level_ > 0) sum_.stages.push_back({cloth.step, cloth.time, sequence_level_, sum_.active_final});
+  policy = LoopPolicy{scene.parallel.schedule, scene.parallel.chunk};
+  loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red(), scene.solver, dec_.ghosts());
+  if (opt_.restart) loop->minimizer().set_first_step(opt_.restart->counters.cg_first_step);
+  own_blocks();
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::refuse_unsupported() const {
+  const SolverSpec& sv = scene.solver;
+  const bool numeric = sv.gradient == GradientMode::Numeric;
+  if (scene.amrc.enabled && numeric)
+    throw InputError("amrc.enabled = true needs solver.gradient = \"analytic\" (the difference windows "
+                     "do not follow hanging particles)");
+  if (ranks_ > 1 && numeric)
+    throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
+                     "reach beyond the ghost particles); run it without mpirun");
+  if (sv.self_contact && scene.amrc.enabled)
+    throw InputError("solver.self_contact = true needs amrc.enabled = false (a coarse leaf's particles lie "
+                     "further apart than the pair distance: the cloth would pass between them)");
+  if (sv.self_contact && numeric)
+    throw InputError("solver.self_contact = true needs solver.gradient = \"analytic\" (the difference "
+                     "windows do not reach a particle's contact partners)");
+  if (ranks_ > 1 && sv.self_contact)
+    throw InputError("solver.self_contact = true runs on one rank only (a partner may lie on another rank "
+                     "beyond the ghost ring); run it without mpirun");
+  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid)
+    throw InputError("solver.preconditioner = \"multigrid\" runs on one rank only (its levels are not "
+                     "split over ranks yet); run it without mpirun or use \"jacobi\"");
+}
+
+// The cloth, new or the checkpoint's, on its first mesh.
+void Simulation::set_up_mesh() {
+  cloth = make_cloth(scene, fabric);
+  const CheckpointState* ck = opt_.restart;
+  if (ck) {
+    restore_state(*ck, cloth);
+    rebuild_topology(cloth, scene.cloth.shear);
+    rebuild_geometry(cloth, fabric.density);
+    sum_.counters = ck->counters;
+    sum_.first_step = cloth.step;
+    last_checkpoint_ = cloth.step;
+  }
+  // The uniform level amrc.start_spacing asks a new run to start on (0: the finest).
+  const int start_level = sequence_start_level(cloth.grid, scene.amrc.start_spacing);
+  // A restart goes on on its checkpoint's mesh: the finest one where it holds no tree.
+  if (!scene.amrc.enabled && !(ck && ck->amrc_levels.empty())) sequence_level_ = start_level;
+  if (scene.amrc.enabled || sequence_level_ > 0) set_up_tree(start_level);  // from the finest mesh (paper), or the checkpoint's
+}
+
+void Simulation::set_up_tree(int start_level) {
+  const CheckpointState* ck = opt_.restart;
+  amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level_);
+  if (ck && !ck->amrc_levels.empty()) {
+    amrc->restore(ck->amrc_levels);
+    if (sequence_level_ > 0) sequence_level_ = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];
+  } else if (sequence_level_ > 0) {
+    amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, sequence_level_);
+  } else if (scene.amrc.enabled && !ck && start_level > 0) {
+    // AMRC starts on leaves that wide (at most max_level), not on the finest mesh: the
+    // criterion coarsens a flat cloth one level per adaptation, and with coarsen_speed
+    // the cloth is moving before it gets far, so the fall's mesh would depend on the grid.
+    amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, std::min(scene.amrc.max_level, start_level));
+  }
+  amrc->apply(cloth, fabric.density, scene.cloth.shear);
+}
+
+void Simulation::set_up_model() {
+  model = make_model(scene, fabric, cloth.grid.hi, cloth.grid.hj);
+  finest_force_scale_ = model.force_scale;
+  sequencing_ = amrc && !scene.amrc.enabled;
+  stage_physics();
+}
+
+void Simulation::rebuild() {
+  if (amrc) {
+    amrc->apply(cloth, fabric.density, scene.cloth.shear);
+  } else {
+    rebuild_topology(cloth, scene.cloth.shear);
+    rebuild_geometry(cloth, fabric.density);
+  }
+  tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
+  dec_.owned.clear();
+  for (int t = 0; t < tiling.count(); ++t) dec_.owned.push_back(t);
+  rebuild_lists();
+  policy = LoopPolicy{scene.parallel.schedule, scene.parallel.chunk};
+  loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red(), scene.solver);
+}
+
+void Simulation::set_tree(const Quadtree& t) {
+  amrc = std::make_unique<Amrc>(cloth, t.max_level());
+  amrc->restore(t.levels());
+  rebuild();
+}
+
+const Reducer& Simulation::red() const {
+  if (dec_.reducer) return *dec_.reducer;
+  return local_red_;
+}
+
+void Simulation::rebuild_lists() {
+  ScopedPhase ph(tm_, kLists);
+  static const std::vector<int64_t> no_ring;
+  build_active_lists(cloth, tiling, dec_.owned, lists, dec_.halo ? dec_.halo->ring() : no_ring);
+  if (amrc) hanging_links(amrc->tree(), lists.hanging);
+}
+
+// Each rank writes its own tiles' blocks of every collective file.
+void Simulation::own_blocks() {
+  blocks_.clear();
+  for (int t : dec_.owned) {
+    const TileRange r = tiling.range(t);
+    blocks_.push_back({r.i0, r.i1, r.j0, r.j1});
+  }
+}
+
+}  // namespace drape
