@@ -29,8 +29,8 @@ namespace drape {
 namespace {
 
 // A benchmark's world, built once per size (static in each benchmark).
-struct Bed : World {
-  explicit Bed(int n, bool amrc = false) : World(mid_drape_scene(n), load_fabric("denim-A")) {
+struct Bed : Simulation {
+  explicit Bed(int n, bool amrc = false) : Simulation(mid_drape_scene(n), load_fabric("denim-A")) {
     if (amrc) uneven_amrc_mesh(*this);
     jitter_mid_drape(*this, 42);
   }
@@ -223,7 +223,7 @@ BENCHMARK(BM_CgIteration)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->I
 void BM_AmrcPerParticle(benchmark::State& state) {
   const int n = int(state.range(0));
   // Built once per size (the benchmark calls this more than once); in place:
-  // a World's parts refer to one another.
+  // a Simulation's parts refer to one another.
   static std::map<int, std::unique_ptr<Bed>[2]> made;
   if (!made.count(n)) made[n][0] = std::make_unique<Bed>(n), made[n][1] = std::make_unique<Bed>(n, true);
   Bed &fine = *made[n][0], &coarse = *made[n][1];

@@ -309,7 +309,7 @@ int run(int argc, char** argv) {
   omp_set_num_threads(1);  // as hypre: the comparison is per core
 
   const Scene scene = landing_scene(n, dt);
-  World w(scene, load_fabric(scene.cloth.fabric));
+  Simulation w(scene, load_fabric(scene.cloth.fabric));
   const double s0 = omp_get_wtime();
   step_to(w, time);
   const double stepping = omp_get_wtime() - s0;

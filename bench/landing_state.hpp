@@ -6,7 +6,7 @@
 #include <time.h>
 
 #include "io/kes.hpp"
-#include "app/world.hpp"
+#include "app/simulation.hpp"
 
 namespace drape {
 
@@ -20,7 +20,7 @@ inline Scene landing_scene(int n, double dt) {
 }
 
 // Steps w to `time` (s).
-inline void step_to(World& w, double time) {
+inline void step_to(Simulation& w, double time) {
   Timers tm;
   while (w.cloth.time < time - 0.5 * w.scene.solver.dt) w.loop->step(tm);
 }

@@ -42,7 +42,7 @@ struct Result {
 // |e|^2 on the box's top, its sides and the floor, by component, and how
 // rough it is along i and along j (per component, 0 smooth, 1 changing sign
 // every particle): which modes the cycle leaves.
-void worst_mode(World& w, const BlockMatrix& K, const std::vector<int64_t>& ids, int n, const MultigridSettings& ms,
+void worst_mode(Simulation& w, const BlockMatrix& K, const std::vector<int64_t>& ids, int n, const MultigridSettings& ms,
                 const char* label) {
   Multigrid mg(ms);
   mg.setup(K, ids, n, n, 1);
@@ -96,7 +96,7 @@ void worst_mode(World& w, const BlockMatrix& K, const std::vector<int64_t>& ids,
 
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
-void kernel_times(World& w, bool modes) {
+void kernel_times(Simulation& w, bool modes) {
   Evaluator& ev = w.loop->evaluator();
   double* z = w.cloth.z.data();
   ev.settled_cost(z);
@@ -196,7 +196,7 @@ void kernel_times(World& w, bool modes) {
   for (const OneSolve& o : solves) {
     SolverSpec spec = w.scene.solver;
     spec.preconditioner = o.pc;
-    TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red, spec);
+    TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red(), spec);
     MultigridSettings ms;
     ms.interpolation = o.ip;
     ms.smoothed_levels = o.smoothed_levels;
@@ -234,7 +234,7 @@ int run(int argc, char** argv) {
   }
   omp_set_num_threads(threads);
   const Scene scene = landing_scene(n, dt);
-  World w(scene, load_fabric(scene.cloth.fabric));
+  Simulation w(scene, load_fabric(scene.cloth.fabric));
   step_to(w, time);
   kernel_times(w, modes);
   const Cloth saved = w.cloth;
@@ -257,7 +257,7 @@ int run(int argc, char** argv) {
     w.model = saved_model;
     SolverSpec spec = scene.solver;
     spec.preconditioner = v.pc;
-    TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red, spec);
+    TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red(), spec);
     loop.newton().set_multigrid(v.mg);
     Timers t;
     Result r{v.name};

@@ -14,7 +14,7 @@
 
 #include "amrc/amrc.hpp"
 #include "io/kes.hpp"
-#include "app/world.hpp"
+#include "app/simulation.hpp"
 
 int main(int argc, char** argv) {
   using namespace drape;
@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   Scene scene;
   scene.cloth.particles = {n, n};
   scene.solver.method = method == "cg" ? SolverMethod::Cg : SolverMethod::Newton;
-  World w(scene, load_fabric(scene.cloth.fabric));
+  Simulation w(scene, load_fabric(scene.cloth.fabric));
   std::unique_ptr<Amrc> amrc;
   if (level > 0) {  // a new stage, as the drape program starts one
     amrc = std::make_unique<Amrc>(w.cloth, level);

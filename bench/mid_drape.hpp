@@ -6,7 +6,7 @@
 
 #include "amrc/criterion.hpp"
 #include "io/kes.hpp"
-#include "app/world.hpp"
+#include "app/simulation.hpp"
 
 namespace drape {
 
@@ -20,7 +20,7 @@ inline Scene mid_drape_scene(int n, Schedule schedule = Schedule::ActiveLists) {
 // An uneven AMRC mesh like a drape's: coarse (leaves of 4 intervals) except
 // a band at the finest level along a fold across the cloth's third, so that
 // tiles carry very different work.
-inline void uneven_amrc_mesh(World& w) {
+inline void uneven_amrc_mesh(Simulation& w) {
   const int n = w.cloth.grid.ni, m = w.cloth.grid.nj;
   Quadtree t(n, m, 2);
   const std::vector<double> flat(size_t(n) * m, 0.0), none;
@@ -30,11 +30,11 @@ inline void uneven_amrc_mesh(World& w) {
     for (int j = 0; j < m; ++j)
       if (std::abs(i - n / 3) <= n / 20) fold[size_t(i) * m + j] = 1.0;
   for (int pass = 0; pass < 3; ++pass) adapt(t, fold, 0.5, 0.1);
-  w.tree = t;
+  w.set_tree(t);
   w.rebuild();
 }
 
-inline void jitter_mid_drape(World& w, unsigned seed) {
+inline void jitter_mid_drape(Simulation& w, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1);
   const Layout& L = w.cloth.layout;

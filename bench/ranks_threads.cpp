@@ -31,7 +31,7 @@ struct Result {
 
 // One solver's run on this rank's share; `newton` picks the solver.
 Result run(int n, int iterations, bool newton, MPI_Comm comm) {
-  World w(mid_drape_scene(n), load_fabric("denim-A"));  // every tile, to set the state up
+  Simulation w(mid_drape_scene(n), load_fabric("denim-A"));  // every tile, to set the state up
   jitter_mid_drape(w, 7);
   Decomposition dec = decompose(w.cloth, w.tiling, comm);
   ActiveLists lists;

@@ -33,7 +33,7 @@
 #include "io/config.hpp"
 #include "io/json.hpp"
 #include "io/kes.hpp"
-#include "app/world.hpp"
+#include "app/simulation.hpp"
 
 namespace drape {
 namespace {
@@ -67,7 +67,7 @@ std::vector<int64_t> fine_work(const Scene& base, const Tiling& tl) {
   auto side = [&](int n, int count) { return count <= 3 ? n : 2 * tl.t + (n - (count - 1) * tl.t); };
   Scene s = base;
   s.cloth.particles = {side(tl.ni, tl.nti), side(tl.nj, tl.ntj)};
-  World w(s, load_fabric(s.cloth.fabric));
+  Simulation w(s, load_fabric(s.cloth.fabric));
   const std::vector<int64_t> each = tile_work(w.cloth, w.tiling);
   std::vector<int64_t> work(tl.count());
   for (int t = 0; t < tl.count(); ++t) {
@@ -82,7 +82,7 @@ constexpr int kCheckedSize = 512;
 bool work_from_kinds_matches(const Scene& base, const Tiling& tl) {
   Scene s = base;
   s.cloth.particles = {tl.ni, tl.nj};
-  World w(s, load_fabric(s.cloth.fabric));
+  Simulation w(s, load_fabric(s.cloth.fabric));
   return tile_work(w.cloth, w.tiling) == fine_work(base, tl);
 }
 

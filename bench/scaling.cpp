@@ -40,7 +40,7 @@ struct Timing {
 
 Timing run_once(int n, int iterations, Schedule sc, int threads, bool amrc) {
   omp_set_num_threads(threads);
-  World w(mid_drape_scene(n, sc), load_fabric("denim-A"));
+  Simulation w(mid_drape_scene(n, sc), load_fabric("denim-A"));
   if (amrc) uneven_amrc_mesh(w);
   jitter_mid_drape(w, 7);  // the same state for every run
   TimeLoop& loop = *w.loop;

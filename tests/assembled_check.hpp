@@ -17,7 +17,7 @@
 namespace drape::test {
 
 // `diag` receives the stiffness diagonal at z (the product's scaling pass).
-inline void expect_assembled_is_the_product(World& w, const std::string& label, std::vector<double>& diag) {
+inline void expect_assembled_is_the_product(Simulation& w, const std::string& label, std::vector<double>& diag) {
   Evaluator& ev = w.loop->evaluator();
   const size_t n = w.cloth.z.size();
   std::vector<double> v(n, 0.0), kv(n, 0.0);

@@ -38,7 +38,7 @@ inline Cantilever run_cantilever(int intervals, double dt, int max_steps, double
   s.solver.max_iterations = 2000;
   s.solver.tolerance = 1e-10;
   s.solver.memory = memory;
-  World wld(s, f);
+  Simulation wld(s, f);
   for (int j = 0; j < 3; ++j)  // the platform: the first two columns clamped flat
     for (int i = 0; i < 2; ++i) wld.cloth.flags[wld.cloth.grid.id(i, j)] |= kFixed;
   wld.rebuild();

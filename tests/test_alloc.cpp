@@ -31,7 +31,7 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrc) {
   s.cloth.particles = {33, 33};
   s.cloth.tile = 8;
   s.cloth.height = 0.42;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Amrc amrc(w.cloth, 2);
   std::vector<int> all(w.tiling.count());
   for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;

@@ -300,8 +300,8 @@ namespace {
 // the inertia-and-gravity sum alone.
 TEST(AmrcMesh, InternalForcesCancelWithHangingParticles) {
   Scene s = flat_scene(13, 11, 0.12, 0.10);
-  World w(s, test_fabric());
-  w.tree = mixed_tree();
+  Simulation w(s, test_fabric());
+  w.set_tree(mixed_tree());
   w.rebuild();
   ASSERT_GE(w.lists.hanging.size(), 4u);
   std::mt19937_64 rng(3);
@@ -340,7 +340,7 @@ namespace {
 // at rest, without gravity: on any mesh the interior particles are in
 // balance. Returns the largest internal force (N) on a free particle at least
 // `margin` intervals from the border, with its residual unscaled.
-double largest_interior_force(World& w, int margin) {
+double largest_interior_force(Simulation& w, int margin) {
   Cloth& c = w.cloth;
   const double T = 50.0, stretch = 1.01;
   for (int64_t p = 0; p < c.grid.n(); ++p) {
@@ -370,23 +370,23 @@ double largest_interior_force(World& w, int margin) {
 // balance, hanging-particle interfaces included.
 TEST(AmrcMesh, ForceOnSurvivingParticlesStaysBalancedAcrossSplitAndMerge) {
   Scene s = flat_scene(17, 17, 0.16, 0.16);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Quadtree t(17, 17, 2);
   const std::vector<double> flat(17 * 17, 0.0);
   for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
-  w.tree = t;
+  w.set_tree(t);
   w.rebuild();
   const double coarse_edge = 50.0 * 4 * w.cloth.grid.hi;  // T h_c, N
   const double before = largest_interior_force(w, 4);
   EXPECT_LE(before, 1e-9 * coarse_edge) << "a uniform coarse mesh is in balance";
   t.refine(t.leaf_at(8, 8));  // split (cascading to keep the balance)
-  w.tree = t;
+  w.set_tree(t);
   w.rebuild();
   ASSERT_FALSE(w.lists.hanging.empty());
   const double split = largest_interior_force(w, 4);
   EXPECT_LE(split, 0.25 * coarse_edge) << "after the split";
   t.coarsen(Cell{8, 8, 2});  // merge back
-  w.tree = t;
+  w.set_tree(t);
   w.rebuild();
   const double merged = largest_interior_force(w, 4);
   EXPECT_LE(merged, 0.25 * coarse_edge) << "after the merge";
@@ -404,7 +404,7 @@ TEST(AmrcMesh, DeflectionStopsAUniformBendOneLevelCoarser) {
   constexpr int n = 17;
   constexpr double h = 0.01, radius = 0.1;
   auto leaf_levels = [&](bool by_width, uint8_t start) {
-    World w(flat_scene(n, n, (n - 1) * h, (n - 1) * h), test_fabric());
+    Simulation w(flat_scene(n, n, (n - 1) * h, (n - 1) * h), test_fabric());
     Amrc amrc(w.cloth, 2);
     amrc.restore(std::vector<uint8_t>(size_t(n - 1) * (n - 1), start));
     amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
@@ -458,7 +458,7 @@ Scene edge_scene() {
   return s;
 }
 
-void drape_over_the_edge(World& w, const double v[3]) {
+void drape_over_the_edge(Simulation& w, const double v[3]) {
   constexpr int n = kEdgeN;
   const double th = w.model.contact.thickness, dt = w.cloth.dt_prev;
   for (int i = 0; i < n; ++i)
@@ -477,7 +477,7 @@ void drape_over_the_edge(World& w, const double v[3]) {
 TEST(AmrcMesh, ParticlesFreedInsideTheBoxAreLifted) {
   constexpr int n = kEdgeN, edge = kEdgeRow;
   const double v[3] = {0.3, -0.2, -1.0};  // m/s
-  World w(edge_scene(), test_fabric());
+  Simulation w(edge_scene(), test_fabric());
   drape_over_the_edge(w, v);
   const Contact& contact = w.model.contact;
   const Scene& s = w.scene;
@@ -512,7 +512,7 @@ TEST(AmrcMesh, ParticlesFreedInsideTheBoxAreLifted) {
 TEST(AmrcMesh, LeavesOverTheBoxEdgeStaySplit) {
   const double still[3] = {0, 0, 0};
   for (bool box : {true, false}) {
-    World w(edge_scene(), test_fabric());
+    Simulation w(edge_scene(), test_fabric());
     drape_over_the_edge(w, still);
     Amrc amrc(w.cloth, 2);
     const Thresholds flat_everywhere{10.0, 5.0};  // no turn is sharp enough to split
@@ -572,7 +572,7 @@ TEST(GridSequence, NextStageGrowsAsTheLastRefinementDid) {
 // back at the material's rest length after strain / rate seconds, no sooner.
 TEST(GridSequence, StretchedEdgesEaseBackToTheirRestLength) {
   Scene s = flat_scene(9, 9, 0.08, 0.08);  // h = 1 cm
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Cloth& c = w.cloth;
   const double h = c.grid.hi;
   const int64_t p = c.grid.id(4, 4);
@@ -599,7 +599,7 @@ TEST(GridSequence, StretchedEdgesEaseBackToTheirRestLength) {
 // a uniform tension stays uniform, through levels 2, 1 and 0.
 TEST(GridSequence, UniformLevelsCarryTheState) {
   Scene s = flat_scene(19, 23, 0.18, 0.22);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Cloth& c = w.cloth;
   const double mass = c.total_mass();
   auto affine = [&](int64_t p, int a) {

@@ -36,7 +36,7 @@ Outcome run(int threads, Schedule schedule) {
   s.parallel.schedule = schedule;
   s.parallel.chunk = 2;
   omp_set_num_threads(threads);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   Outcome out{};
   StepStats st;
@@ -47,7 +47,7 @@ Outcome run(int threads, Schedule schedule) {
   out.cost = st.cost.total();
   std::vector<int> all;
   for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
-  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
   return out;
 }
 
@@ -66,12 +66,12 @@ TEST(Determinism, SameBitsForEveryThreadCountAndSchedule) {
 
 TEST(Checksum, ChangesWithAnyBitOfTheState) {
   Scene s = flat_scene(6, 5, 0.1, 0.1);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   std::vector<int> all;
   for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
-  const std::string a = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  const std::string a = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
   w.cloth.z[w.cloth.layout.moment() + 7] = 1e-300;  // one tiny moment
-  const std::string b = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  const std::string b = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
   EXPECT_NE(a, b);
   EXPECT_EQ(a.size(), 32u);
 }
@@ -118,13 +118,13 @@ TEST(ActiveLists, CompactNumbersAreTheFreeParticlesPositions) {
     s.cloth.particles = {23, 19};
     s.cloth.size = {0.3, 0.25};
     s.cloth.tile = 5;
-    World w(s, test_fabric());
+    Simulation w(s, test_fabric());
     if (amrc) {
       Quadtree t(23, 19, 2);
       const std::vector<double> flat(23 * 19, 0.0);
       for (int pass = 0; pass < 4; ++pass) adapt(t, flat, 1.0, 0.5);
       t.refine(t.leaf_at(9, 5));
-      w.tree = t;
+      w.set_tree(t);
     }
     w.cloth.flags[0] |= kFixed;
     w.rebuild();
@@ -138,7 +138,7 @@ TEST(ActiveLists, CompactNumbersAreTheFreeParticlesPositions) {
         std::vector<int> owned;
         for (int t = 0; t < w.tiling.count(); ++t) owned.push_back(t);
         build_active_lists(w.cloth, w.tiling, owned, w.lists);
-        if (w.tree) hanging_links(*w.tree, w.lists.hanging);
+        if (w.tree()) hanging_links(*w.tree(), w.lists.hanging);
       }
       std::vector<int64_t> want;
       for (int64_t p : w.lists.particles.items)

@@ -17,7 +17,7 @@ constexpr double kTheta = 20 * M_PI / 180;  // tan = 0.364
 // A 5 x 5 cloth lying in the floor's contact layer, friction mu on the
 // floor, settled under upright gravity; a fixed step, so that positions are
 // samples of one trajectory.
-World resting_cloth(double mu) {
+Simulation resting_cloth(double mu) {
   Scene s = flat_scene(5, 5, 0.04, 0.04);
   s.obstacle.floor = true;
   s.obstacle.floor_friction = mu;
@@ -26,25 +26,25 @@ World resting_cloth(double mu) {
   s.solver.dt_max = 1e-3;
   s.solver.tolerance = 1e-12;
   s.solver.max_iterations = 1000;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   for (int k = 0; k < 50; ++k) w.loop->step(tm);
   return w;
 }
 
-void tilt(World& w) {
+void tilt(Simulation& w) {
   w.model.gravity[0] = kG * std::sin(kTheta);
   w.model.gravity[2] = -kG * std::cos(kTheta);
 }
 
-double mean_x(const World& w) {
+double mean_x(const Simulation& w) {
   double sum = 0;
   for (int64_t p = 0; p < w.cloth.grid.n(); ++p) sum += w.cloth.x()[3 * p];
   return sum / double(w.cloth.grid.n());
 }
 
 // The largest in-plane displacement of any particle from x0.
-double largest_slip(const World& w, const std::vector<double>& x0) {
+double largest_slip(const Simulation& w, const std::vector<double>& x0) {
   double most = 0;
   for (int64_t p = 0; p < w.cloth.grid.n(); ++p)
     most = std::max(most, std::hypot(w.cloth.x()[3 * p] - x0[3 * p], w.cloth.x()[3 * p + 1] - x0[3 * p + 1]));
@@ -56,7 +56,7 @@ double largest_slip(const World& w, const std::vector<double>& x0) {
 // step: 100 steps leave it within 100 eps (0.1 mm), where without friction
 // it slides g sin(theta) t^2 / 2 = 17 mm.
 TEST(Friction, HoldsTheClothWhenMuExceedsTheSlope) {
-  World w = resting_cloth(0.6);
+  Simulation w = resting_cloth(0.6);
   ASSERT_GT(0.6, std::tan(kTheta));
   const std::vector<double> x0(w.cloth.x(), w.cloth.x() + 3 * w.cloth.grid.n());
   tilt(w);
@@ -71,7 +71,7 @@ TEST(Friction, HoldsTheClothWhenMuExceedsTheSlope) {
 // the change of its velocity (exact for a constant acceleration).
 TEST(Friction, SlidingClothAcceleratesAtGTimesSinMinusMuCos) {
   const double mu = 0.2;
-  World w = resting_cloth(mu);
+  Simulation w = resting_cloth(mu);
   tilt(w);
   Timers tm;
   std::vector<double> x, t;
@@ -91,13 +91,13 @@ TEST(Friction, SlidingClothAcceleratesAtGTimesSinMinusMuCos) {
 // or sphere; the floor frictionless) runs the friction code at every
 // particle, adding nothing: the states are bit for bit those of mu = 0.
 TEST(Friction, NothingHeldLeavesTheStatesBitForBit) {
-  World plain = resting_cloth(0.0);
-  World held_by_nothing = resting_cloth(0.0);
+  Simulation plain = resting_cloth(0.0);
+  Simulation held_by_nothing = resting_cloth(0.0);
   held_by_nothing.model.contact.friction = 0.5;  // obstacle shape none: nothing to hold
   ASSERT_TRUE(held_by_nothing.model.contact.has_friction());
   const double start = mean_x(plain);
   Timers tm;
-  for (World* w : {&plain, &held_by_nothing}) {
+  for (Simulation* w : {&plain, &held_by_nothing}) {
     tilt(*w);
     for (int k = 0; k < 30; ++k) w->loop->step(tm);
   }

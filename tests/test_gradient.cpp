@@ -36,7 +36,7 @@ Quadtree amrc_tree() {
 
 // Random, well away from flat: positions jittered by 30% of h, forces drawn
 // over several band widths, a sphere and the floor touching some particles.
-World random_world(unsigned seed, bool amrc = false) {
+Simulation random_world(unsigned seed, bool amrc = false) {
   Scene s = amrc ? flat_scene(13, 11, 0.12, 0.10) : flat_scene(7, 6, 0.06, 0.05);
   s.cloth.height = 0.004;
   s.cloth.bend_reversal = 5;  // the targets then move inside the bands
@@ -48,8 +48,8 @@ World random_world(unsigned seed, bool amrc = false) {
   s.obstacle.radius = 0.025;
   s.obstacle.floor = true;
   s.solver.dt = 2e-3;
-  World w(s, test_fabric());
-  if (amrc) w.tree = amrc_tree();
+  Simulation w(s, test_fabric());
+  if (amrc) w.set_tree(amrc_tree());
   w.cloth.flags[0] |= kFixed;  // a clamped corner: not an unknown
   w.rebuild();
   std::mt19937_64 rng(seed);
@@ -79,7 +79,7 @@ World random_world(unsigned seed, bool amrc = false) {
 // Coulomb friction on the sphere and the floor, with a slip ramp as wide as
 // the jitter's slips (about 3 mm), so that particles lie both on the ramp
 // and beyond it. Returns how many particles a surface holds at x1.
-int with_friction(World& w) {
+int with_friction(Simulation& w) {
   w.model.contact.friction = 0.4;
   w.model.contact.floor_friction = 0.7;
   w.model.contact.slip = 1e-3;
@@ -91,7 +91,7 @@ int with_friction(World& w) {
   return held;
 }
 
-CostTerms term_cost(World& w, std::vector<double>& z) { return w.loop->evaluator().evaluate(z.data(), nullptr); }
+CostTerms term_cost(Simulation& w, std::vector<double>& z) { return w.loop->evaluator().evaluate(z.data(), nullptr); }
 
 // (cp - cm) / 2h summed term by term: each difference then rounds at its own
 // term's size, not at the total's (the tensions' share of the cost is
@@ -102,7 +102,7 @@ double difference(const CostTerms& cp, const CostTerms& cm, double h) {
 }
 
 // Central difference of the whole cost, unknown by unknown.
-std::vector<double> central_difference(World& w) {
+std::vector<double> central_difference(Simulation& w) {
   std::vector<double> z = w.cloth.z, g(z.size(), 0.0);
   const Layout& L = w.cloth.layout;
   auto scale = [&](int64_t k) {
@@ -143,7 +143,7 @@ const char* const kBlocks[4] = {"positions", "tensions", "moments", "shear force
 // in that block: the blocks differ by orders of magnitude, so a global
 // maximum would let an error in the smaller blocks pass unseen (and a block
 // a leaves at zero where b is not counts as an error of 1).
-std::array<double, 4> block_errors(const World& w, const std::vector<double>& a, const std::vector<double>& b) {
+std::array<double, 4> block_errors(const Simulation& w, const std::vector<double>& a, const std::vector<double>& b) {
   const Layout& L = w.cloth.layout;
   const int64_t edges[5] = {0, L.tension(), L.moment(), L.shear(), L.size()};
   std::array<double, 4> out{};
@@ -167,7 +167,7 @@ class GradientTerm : public ::testing::TestWithParam<Term> {};
 TEST_P(GradientTerm, AnalyticMatchesCentralDifferences) {
   const Term t = GetParam();
   for (unsigned seed : {1u, 2u, 3u}) {
-    World w = random_world(seed, t.amrc);
+    Simulation w = random_world(seed, t.amrc);
     if (t.amrc) {
       ASSERT_GE(w.lists.hanging.size(), 4u) << "the AMRC mesh should have hanging particles";
     }
@@ -203,7 +203,7 @@ INSTANTIATE_TEST_SUITE_P(EachTerm, GradientTerm,
 // friction's 3x3 block, against central differences. Plain and AMRC mesh.
 TEST(Gradient, FrictionMatchesCentralDifferences) {
   for (bool amrc : {false, true}) {
-    World w = random_world(5, amrc);
+    Simulation w = random_world(5, amrc);
     ASSERT_GT(with_friction(w), 0);
     w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
     std::vector<double> ga(w.cloth.z.size());
@@ -214,7 +214,7 @@ TEST(Gradient, FrictionMatchesCentralDifferences) {
 }
 
 TEST(Gradient, NumericModeMatchesAnalytic) {
-  World w = random_world(7);
+  Simulation w = random_world(7);
   std::vector<double> ga(w.cloth.z.size()), gn(w.cloth.z.size());
   const CostTerms ca = w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
   const CostTerms cn = w.loop->evaluator().numeric_gradient(w.cloth.z.data(), gn.data());
@@ -229,7 +229,7 @@ TEST(Gradient, NumericModeMatchesAnalytic) {
 }
 
 TEST(Gradient, NonUnknownsHaveZeroGradient) {
-  World w = random_world(4);
+  Simulation w = random_world(4);
   std::vector<double> ga(w.cloth.z.size(), 1.0);
   w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
   for (int k = 0; k < 3; ++k) EXPECT_EQ(ga[k], 0.0) << "fixed particle 0";
@@ -339,7 +339,7 @@ TEST(ElementKernels, HandDerivedHessianVectorMatchesDualReference) {
 TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
   for (bool amrc : {false, true})
   for (bool friction : {false, true}) {
-    World w = random_world(11, amrc);
+    Simulation w = random_world(11, amrc);
     if (friction) {
       ASSERT_GT(with_friction(w), 0);
     }
@@ -387,7 +387,7 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
 TEST(Stiffness, AssembledMatchesTheProduct) {
   for (bool amrc : {false, true})
   for (bool friction : {false, true}) {
-    World w = random_world(13, amrc);
+    Simulation w = random_world(13, amrc);
     if (friction) {
       ASSERT_GT(with_friction(w), 0);
     }
@@ -414,8 +414,8 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
     Fabric f = test_fabric();
     for (int d = 0; d < 2; ++d) f.bending[d].hb = 0;
     f.shear.hg = 0;
-    World w(s, f);
-    if (amrc) w.tree = amrc_tree();
+    Simulation w(s, f);
+    if (amrc) w.set_tree(amrc_tree());
     w.cloth.flags[0] |= kFixed;
     w.rebuild();
     // A tilted plane, stretched in it (tension), its lower part inside the
@@ -480,14 +480,14 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
 // old z agrees exactly).
 TEST(Stiffness, KeptGradientsFollowZ) {
   for (bool amrc : {false, true}) {
-    World w = random_world(12, amrc), fresh = random_world(12, amrc);
+    Simulation w = random_world(12, amrc), fresh = random_world(12, amrc);
     const size_t n = w.cloth.z.size();
     std::vector<double> v(n, 0.0), k1(n), k2(n), k3(n), diag(n);
     std::mt19937_64 rng(9);
     std::uniform_real_distribution<double> u(-1, 1);
     for (int64_t p : w.lists.particles.items)
       for (int k = 0; k < 3; ++k) v[3 * p + k] = u(rng);
-    auto product = [&](World& x, std::vector<double>& out) {
+    auto product = [&](Simulation& x, std::vector<double>& out) {
       Evaluator& ev = x.loop->evaluator();
       ev.hysteresis_forces(x.cloth.z.data());
       ev.stiffness_diagonal(x.cloth.z.data(), diag.data());
@@ -502,7 +502,7 @@ TEST(Stiffness, KeptGradientsFollowZ) {
     product(w, k3);
     EXPECT_EQ(k1, k3) << (amrc ? "AMRC mesh, not keeping" : "plain mesh, not keeping");
     w.loop->evaluator().keep_products(true);
-    for (World* x : {&w, &fresh})
+    for (Simulation* x : {&w, &fresh})
       for (int64_t p : x->lists.particles.items) x->cloth.z[3 * p + 2] += 1e-3 * x->cloth.grid.hi * (p % 5);
     product(w, k2);
     product(fresh, k3);
@@ -519,7 +519,7 @@ TEST(Stiffness, KeptGradientsFollowZ) {
 // particles' contact ones) for an evaluator that never saw the old z.
 TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
   for (bool amrc : {false, true}) {
-    World two = random_world(14, amrc), one = random_world(14, amrc);
+    Simulation two = random_world(14, amrc), one = random_world(14, amrc);
     const size_t n = two.cloth.z.size();
     std::vector<double> v(n, 0.0);
     std::mt19937_64 rng(3);
@@ -530,7 +530,7 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
       CostTerms cost;
       std::vector<double> z, rho, diag, k1, k2;
     };
-    auto run = [&](World& w, bool settled) {
+    auto run = [&](Simulation& w, bool settled) {
       Evaluator& ev = w.loop->evaluator();
       Out o;
       if (settled) {
@@ -565,12 +565,12 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
     };
     const Out first = run(two, false);
     same(first, run(one, true), "");
-    for (World* x : {&two, &one})
+    for (Simulation* x : {&two, &one})
       for (int64_t p : x->lists.particles.items) {
         x->cloth.z[3 * p + 2] += 2e-3 * x->cloth.grid.hi * (p % 7);
         x->cloth.z[3 * p] -= 1e-3 * x->cloth.grid.hi * (p % 3);
       }
-    World fresh = random_world(14, amrc);
+    Simulation fresh = random_world(14, amrc);
     fresh.cloth.z = one.cloth.z;
     const Out moved = run(one, true);
     same(run(fresh, false), moved, ", z moved");
@@ -604,7 +604,7 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
 // only the lists' stamp tells). settled_cost comes right before the
 // diagonal: a diagonal first after a change must not read its numbers.
 TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
-  World w = random_world(21, true);
+  Simulation w = random_world(21, true);
   Evaluator& ev = w.loop->evaluator();
   const size_t n = w.cloth.z.size();
   std::mt19937_64 rng(4);
@@ -618,16 +618,18 @@ TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
     const size_t hanging = w.lists.hanging.size();
     if (refine) {
       std::vector<Cell> leaves;
-      w.tree->leaves(leaves);
+      w.tree()->leaves(leaves);
       const auto coarse = std::find_if(leaves.begin(), leaves.end(), [](const Cell& c) { return c.level > 0; });
       ASSERT_NE(coarse, leaves.end()) << "no leaf left to refine";
-      w.tree->refine(*coarse);
-      apply_tree(*w.tree, w.cloth, w.fabric.density, w.scene.cloth.shear);
+      Quadtree finer = *w.tree();
+      finer.refine(*coarse);
+      w.amrc->restore(finer.levels());
+      w.amrc->apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
     } else {
       w.cloth.flags[w.lists.particles.items[w.lists.particles.size() / 2]] |= kFixed;
     }
     build_active_lists(w.cloth, w.tiling, owned, w.lists);
-    hanging_links(*w.tree, w.lists.hanging);
+    hanging_links(*w.tree(), w.lists.hanging);
     w.loop->freeze_bend_axes();  // new triples' axes
     ASSERT_NE(w.lists.particles.size(), before) << "the lists did not change: the test does not test";
     if (!refine) {
@@ -686,7 +688,7 @@ TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
   for (const auto& entry : entries) {
     change(refine);
     if (HasFatalFailure()) return;
-    Evaluator fresh(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red);
+    Evaluator fresh(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red());
     const std::vector<double> mine = entry.second(ev), theirs = entry.second(fresh);
     EXPECT_EQ(mine, theirs) << entry.first << " first after " << (refine ? "a refine" : "fixing a particle");
     refine = !refine;

@@ -33,7 +33,7 @@ Held held_after_two_steps(SolverMethod method, int n) {
   const size_t before = heap_in_use();
   Held h;
   {
-    World w(s, test_fabric());
+    Simulation w(s, test_fabric());
     Timers tm;
     for (int k = 0; k < 2; ++k) w.loop->step(tm);
     MemoryTable t;
@@ -65,13 +65,13 @@ TEST(Memory, BytesPerParticleStayUnderTheBound) {
   EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1966.0);
 }
 
-size_t evaluator_bytes(World& w) {
+size_t evaluator_bytes(Simulation& w) {
   MemoryTable t;
   w.loop->evaluator().memory(t);
   return t.total();
 }
 // Newton's compact vectors (the first row of its table).
-size_t compact_bytes(World& w) {
+size_t compact_bytes(Simulation& w) {
   MemoryTable t;
   w.loop->newton().memory(t);
   return t.rows.at(0).bytes;
@@ -88,7 +88,7 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
   Scene s;
   s.cloth.particles = {129, 129};
   s.cloth.tile = 16;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   w.loop->step(tm);
   const size_t finest = evaluator_bytes(w), finest_compact = compact_bytes(w);
@@ -123,9 +123,9 @@ TEST(Memory, KeepingProductsAgainOnACoarserMesh) {
   s.cloth.particles = {33, 33};
   s.cloth.tile = 8;
   s.cloth.height = 0.401;  // contact within a few steps: Newton solves
-  World kept(s, test_fabric()), toggled(s, test_fabric());
+  Simulation kept(s, test_fabric()), toggled(s, test_fabric());
   Timers tm;
-  for (World* w : {&kept, &toggled}) {
+  for (Simulation* w : {&kept, &toggled}) {
     Amrc amrc(w->cloth, 1);
     amrc.set_uniform_level(w->cloth, w->fabric.density, s.cloth.shear, 1);
     std::vector<int> all(w->tiling.count());
@@ -154,9 +154,9 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
   s.cloth.particles = {33, 33};
   s.cloth.tile = 8;
   s.cloth.height = 0.401;  // contact within a few steps: Newton solves
-  World kept(s, test_fabric()), freed(s, test_fabric());
+  Simulation kept(s, test_fabric()), freed(s, test_fabric());
   Timers tm;
-  auto listed = [](World& w) {
+  auto listed = [](Simulation& w) {
     MemoryTable t;
     w.loop->memory(t);
     return t.total();

@@ -27,7 +27,7 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
   s.cloth.tile = 16;
   const Fabric f = test_fabric();
   Timers tm;
-  World one(s, f);
+  Simulation one(s, f);
   one.loop->step(tm);
   const size_t whole = evaluator_bytes(*one.loop);
 

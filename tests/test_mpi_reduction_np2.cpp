@@ -47,14 +47,14 @@ TEST(MpiReducer, TileSumsMatchOneRankBitwise) {
 TEST(MpiReducer, StateChecksumIndependentOfOwnership) {
   Scene s = flat_scene(13, 11, 0.2, 0.2);
   s.cloth.tile = 4;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   for (size_t k = 0; k < w.cloth.z.size(); ++k) w.cloth.z[k] += 1e-3 * double(k % 17);
   std::vector<int> all, mine;
   for (int t = 0; t < w.tiling.count(); ++t) {
     all.push_back(t);
     if (t % 2 == rank()) mine.push_back(t);
   }
-  const std::string one = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  const std::string one = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
   MpiReducer red(MPI_COMM_WORLD, w.tiling.count());
   EXPECT_EQ(state_checksum(w.cloth, w.tiling, mine, red).hex(), one);
   EXPECT_EQ(red.max(double(rank())), 1.0);

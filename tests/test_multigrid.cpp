@@ -20,7 +20,7 @@ namespace {
 // K has its geometric term), a corner clamped, a long step (0.02 s: the
 // stiffness, not the mass, dominates K).
 struct Stretched {
-  World w;
+  Simulation w;
   BlockMatrix K;
   explicit Stretched(int n) : w(flat_scene(n, n, 1.0, 1.0), test_fabric()) {
     w.cloth.flags[0] |= kFixed;

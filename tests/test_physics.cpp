@@ -35,7 +35,7 @@ TEST_P(Minimizers, LowerTheCostAtEveryIterationAndConverge) {
   Scene s = small_drape();
   s.cloth.height = 0.1 + 0.0125 + 0.002;  // lands on the box: the solver has work to do
   s.solver.method = GetParam();
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   int total = 0;
   for (int step = 0; step < 15; ++step) {
@@ -64,7 +64,7 @@ INSTANTIATE_TEST_SUITE_P(Both, Minimizers, ::testing::Values(SolverMethod::Cg, S
 // stay clear of the axis, where the angle about it is undefined).
 TEST(BendAxes, NormalToTheirLineTheOtherYarnWhenUnsheared) {
   Scene s = flat_scene(6, 5, 0.05, 0.04);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   const Grid& g = w.cloth.grid;
   auto axis = [&](int64_t p, int d) {
     const double* a = &w.cloth.bend_axis[6 * p + 3 * d];
@@ -100,7 +100,7 @@ TEST(FreeFall, FollowsGravity) {
   s.solver.dt_max = 1e-3;  // fixed step: compare with the exact parabola
   s.solver.tolerance = 1e-9;
   s.solver.max_iterations = 1000;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   const std::vector<double> x0(w.cloth.z.begin(), w.cloth.z.begin() + 3 * w.cloth.grid.n());
   Timers tm;
   for (int k = 0; k < 20; ++k) {
@@ -127,7 +127,7 @@ TEST(FreeFall, DragGivesTheTerminalSpeed) {
   s.solver.max_iterations = 1000;
   s.solver.drag = 25.0;
   s.obstacle.floor = false;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   double v = w.loop->step(tm).max_speed;  // the first step starts from a half-step velocity
   for (int k = 1; k < 200; ++k) {         // 0.4 s: ten time constants
@@ -143,7 +143,7 @@ TEST(FreeFall, DragGivesTheTerminalSpeed) {
 TEST(Mass, TotalEqualsArealDensityTimesArea) {
   for (auto n : {std::array<int, 2>{3, 3}, std::array<int, 2>{17, 9}, std::array<int, 2>{64, 33}}) {
     Scene s = flat_scene(n[0], n[1], 0.7, 0.4);
-    World w(s, test_fabric());
+    Simulation w(s, test_fabric());
     const double expected = w.fabric.density * 0.7 * 0.4;
     EXPECT_NEAR(w.cloth.total_mass(), expected, 1e-12 * expected) << n[0] << "x" << n[1];
   }
@@ -152,7 +152,7 @@ TEST(Mass, TotalEqualsArealDensityTimesArea) {
 TEST(Contact, NoParticleEndsInsideTheBox) {
   Scene s = small_drape();
   s.cloth.height = 0.1 + 0.0125 + 0.002;  // 2 mm above the contact margin: lands at once
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   const Obstacle& box = w.model.contact.obstacle;
   int touching = 0;
@@ -268,7 +268,7 @@ TEST(Contact, ASettledParticleKeepsOnlyItsMotionAlongTheSurface) {
 TEST(Shear, ADrapeOverABoxIsItsOwnMirrorImage) {
   Scene s = small_drape();
   s.cloth.height = 0.1 + 0.0125 + 0.002;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   while (w.cloth.time < 0.15) w.loop->step(tm);
   const Grid& g = w.cloth.grid;

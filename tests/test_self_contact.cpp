@@ -24,7 +24,7 @@ constexpr double kH = 0.01;  // spacing: the contact layer is h/2, the pair dist
 // Particle (i, j) of a strip folded across j: the grid line along j runs
 // flat on the floor's layer for s < s0, turns up a half circle of radius r,
 // and runs back above the lower half at height 2r, a gap of gap_in_h spacings.
-void fold(World& w, double gap_in_h) {
+void fold(Simulation& w, double gap_in_h) {
   const Grid& g = w.cloth.grid;
   const double layer = w.model.contact.thickness, r = 0.5 * gap_in_h * g.hj, s0 = 10 * g.hj;
   for (int i = 0; i < g.ni; ++i)
@@ -59,7 +59,7 @@ Scene strip_scene(bool self_contact) {
 
 // The closest two particles that are not mesh neighbours (rest distance
 // above twice the pair distance, as the pair list excludes them) come.
-double closest_pair(const World& w, double pair_distance) {
+double closest_pair(const Simulation& w, double pair_distance) {
   const Grid& g = w.cloth.grid;
   double best = 1e300;
   for (int64_t p = 0; p < g.n(); ++p)
@@ -86,7 +86,7 @@ Dropped drop(bool self_contact, int threads = 1, double end = 0.4, double gap_in
   omp_set_num_threads(threads);
   Scene s = strip_scene(self_contact);
   s.solver.preconditioner = pre;
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   fold(w, gap_in_h);
   Timers tm;
   Dropped out{};
@@ -139,8 +139,8 @@ TEST(SelfContact, SameBitsOnOneAndTwoThreads) {
 
 // A folded strip pressed together (the flap half a pair distance above the
 // lower half), jittered: pairs in contact on both sides of the ramp.
-World pressed_world(unsigned seed) {
-  World w(strip_scene(true), test_fabric());
+Simulation pressed_world(unsigned seed) {
+  Simulation w(strip_scene(true), test_fabric());
   fold(w, 0.5);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -151,7 +151,7 @@ World pressed_world(unsigned seed) {
   return w;
 }
 
-int pairs_in_contact(const World& w) {
+int pairs_in_contact(const Simulation& w) {
   const SelfContact& sc = w.loop->evaluator().self_contact();
   int n = 0;
   for (int64_t p : w.lists.particles.items)
@@ -167,7 +167,7 @@ int pairs_in_contact(const World& w) {
 // position, relative to the largest entry.
 TEST(SelfContact, GradientMatchesCentralDifferences) {
   for (unsigned seed : {1u, 2u}) {
-    World w = pressed_world(seed);
+    Simulation w = pressed_world(seed);
     Evaluator& ev = w.loop->evaluator();
     w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
     w.model.memory = 0;  // the memory term counts with its element's
@@ -196,7 +196,7 @@ TEST(SelfContact, GradientMatchesCentralDifferences) {
 // K assembled (multigrid's finest level) is the product's operator with
 // self-contact's blocks, and symmetric: partner columns included.
 TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
-  World w = pressed_world(3);
+  Simulation w = pressed_world(3);
   Evaluator& ev = w.loop->evaluator();
   ev.settled_cost(w.cloth.z.data());
   ASSERT_GT(pairs_in_contact(w), 20);
@@ -205,7 +205,7 @@ TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
   const size_t n = w.cloth.z.size();
   const std::vector<int64_t>& ids = w.lists.particles.items;
   // The diagonal's self-contact share: the trace of each particle's block / 3.
-  World plain = pressed_world(3);
+  Simulation plain = pressed_world(3);
   plain.model.self_contact = false;
   std::vector<double> dplain(n, 0.0);
   plain.loop->evaluator().settled_cost(plain.cloth.z.data());
@@ -219,7 +219,7 @@ TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
 // step's start and kept while particles move less than D/2, and one built
 // afresh at the current positions, give the same forces bit for bit.
 TEST(SelfContact, ForcesDoNotDependOnWhenTheListWasBuilt) {
-  World w = pressed_world(4), fresh = pressed_world(4);
+  Simulation w = pressed_world(4), fresh = pressed_world(4);
   Evaluator& ev = w.loop->evaluator();
   ev.evaluate(w.cloth.z.data(), nullptr);
   const uint64_t built = ev.self_contact().builds();

@@ -16,25 +16,25 @@ namespace drape::test {
 namespace {
 
 // 13 x 11 particles, on the finest mesh or on mixed_tree's leaves.
-World mixed_world(bool amrc) {
-  World w(flat_scene(13, 11, 0.12, 0.10), test_fabric());
+Simulation mixed_world(bool amrc) {
+  Simulation w(flat_scene(13, 11, 0.12, 0.10), test_fabric());
   if (!amrc) return w;
-  w.tree = mixed_tree();
+  w.set_tree(mixed_tree());
   w.rebuild();
   return w;
 }
 
-int64_t leaf_count(const World& w) {
-  if (!w.tree) return int64_t(w.cloth.grid.ni - 1) * (w.cloth.grid.nj - 1);
+int64_t leaf_count(const Simulation& w) {
+  if (!w.tree()) return int64_t(w.cloth.grid.ni - 1) * (w.cloth.grid.nj - 1);
   int64_t n = 0;
-  w.tree->for_each_leaf([&](const Cell&) { ++n; });
+  w.tree()->for_each_leaf([&](const Cell&) { ++n; });
   return n;
 }
 
 class ShearCells : public ::testing::TestWithParam<bool> {};
 
 TEST_P(ShearCells, AreTheLeavesAndTileTheCloth) {
-  const World w = mixed_world(GetParam());
+  const Simulation w = mixed_world(GetParam());
   const Cloth& c = w.cloth;
   int64_t on = 0;
   double area = 0;
@@ -69,7 +69,7 @@ TEST_P(ShearCells, AreTheLeavesAndTileTheCloth) {
 // x += tan(gamma) y shears every corner of every cell by gamma exactly,
 // whatever the cell's size.
 TEST_P(ShearCells, AUniformShearReadsTheSameInEveryCell) {
-  World w = mixed_world(GetParam());
+  Simulation w = mixed_world(GetParam());
   Cloth& c = w.cloth;
   const double gamma = 0.2;
   for (int64_t p = 0; p < c.grid.n(); ++p) c.z[3 * p] += std::tan(gamma) * c.z[3 * p + 1];
@@ -89,7 +89,7 @@ INSTANTIATE_TEST_SUITE_P(FinestAndAmrc, ShearCells, ::testing::Values(false, tru
 // hourglass of the per-particle cross), but every cell shears by
 // atan(2 delta / h), with the sign alternating along i.
 TEST(ShearCell, AnInPlaneZigzagShearsEveryCell) {
-  World w = mixed_world(false);
+  Simulation w = mixed_world(false);
   Cloth& c = w.cloth;
   const double delta = 0.1 * c.grid.hi;
   for (int64_t p = 0; p < c.grid.n(); ++p) c.z[3 * p + 1] += c.grid.i_of(p) % 2 ? -delta : delta;
@@ -169,7 +169,7 @@ TEST(ShearLanes, CellAndHessianVectorAreTheScalarKernelsBitForBit) {
 
 TEST(ShearCell, AmrcCarriesTheForceAcrossSplitAndMerge) {
   Scene s = flat_scene(9, 9, 0.08, 0.08);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Cloth& c = w.cloth;
   Amrc amrc(c, 1);
   amrc.set_uniform_level(c, w.fabric.density, true, 1);

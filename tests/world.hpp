@@ -1,10 +1,12 @@
 #pragma once
-// Scenes and a fabric for solver tests, built into a drape::World.
+// Scenes and a fabric for solver tests, built into a drape::Simulation.
 #include <cmath>
 #include <random>
 
 #include "amrc/criterion.hpp"
-#include "app/world.hpp"
+#include "amrc/remesh.hpp"
+#include "app/simulation.hpp"
+#include "mesh/topology.hpp"
 
 namespace drape::test {
 

@@ -135,7 +135,6 @@ void Simulation::rebuild() {
 void Simulation::set_tree(const Quadtree& t) {
   amrc = std::make_unique<Amrc>(cloth, t.max_level());
   amrc->restore(t.levels());
-  rebuild();
 }
 
 const Reducer& Simulation::red() const {

@@ -78,7 +78,7 @@ class Simulation {
   // One rank: after changing flags (fixing particles), the tree or the
   // policy, the lists and the time loop built again.
   void rebuild();
-  // One rank: the mesh as tree t (same grid), then rebuild().
+  // One rank: the mesh as tree t (same grid) from the next rebuild() on.
   void set_tree(const Quadtree& t);
   // The AMRC tree; none: the finest grid.
   const Quadtree* tree() const { return amrc ? &amrc->tree() : nullptr; }
