@@ -22,7 +22,8 @@ zz() { report "$1" '"%d %d" % (r["zigzag"]["pairs"], r["zigzag"]["zigzags"])'; }
 amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set solver.steps=60)
 # A cloth let down onto the floor just inside the coarse mesh's contact layer
 # (half its cell diagonal, 44.2 mm): at rest on that mesh after a few steps,
-# then split (the drape over the box would take thousands of steps to rest).
+# then split (the drape over the box would take thousands of steps to rest),
+# and at rest on the finest mesh a few steps later.
 sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
           --set 'obstacle.shape="none"' --set cloth.height=0.044)
 edges=(--set 'amrc.indicator="deflection"' --set amrc.refine=0.5 --set amrc.coarsen=0.1
@@ -74,6 +75,9 @@ for method in $cases; do
     stages=$(report "$work/$method-1" '" ".join("%d@%d" % (g["level"], g["from_step"]) for g in r["stages"])')
     [[ $stages =~ ^1@0\ 0@([0-9]+)$ ]] && (( BASH_REMATCH[1] >= 2 )) ||
       { echo "sequence: stages $stages, expected level 1 from step 0, then level 0 after a few steps at rest"; exit 1; }
-    echo "sequence: stages $stages"
+    # Rest on the coarse mesh is not rest on the finest: the run goes on after the split.
+    split=${BASH_REMATCH[1]} steps=$(field "$work/$method-1" steps)
+    (( steps >= split + 3 )) || { echo "sequence: the run ended at step $steps, right after the split at step $split"; exit 1; }
+    echo "sequence: stages $stages, $steps steps"
   fi
 done
