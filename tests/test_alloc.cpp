@@ -8,7 +8,7 @@
 
 #include "amrc/amrc.hpp"
 #include "amrc/remesh.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace {
 std::atomic<long> g_allocations{0};

@@ -14,7 +14,7 @@
 #include "mesh/quadtree.hpp"
 #include "amrc/sequence.hpp"
 #include "mesh/cloth.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

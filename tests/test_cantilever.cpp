@@ -8,7 +8,7 @@
 
 #include <cmath>
 
-#include "cantilever.hpp"
+#include "support/cantilever.hpp"
 
 namespace drape::test {
 namespace {

@@ -17,24 +17,17 @@
 #include <string>
 #include <vector>
 
+#include "support/files.hpp"
+
 extern char** environ;
 
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path tmp_dir() {
-  const fs::path d = fs::path(DRAPE_TEST_TMP) / ("test_cli-" + std::to_string(getpid()));
-  fs::create_directories(d);
-  return d;
-}
+using drape::test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+fs::path tmp_dir() { return drape::test::process_tmp_dir("test_cli"); }
 
 void spit(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 

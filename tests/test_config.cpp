@@ -19,6 +19,7 @@
 #include "io/config.hpp"
 #include "base/error.hpp"
 #include "solver/scene.hpp"
+#include "support/files.hpp"
 
 namespace fs = std::filesystem;
 using drape::InputError;
@@ -26,13 +27,7 @@ using drape::Scene;
 
 namespace {
 
-// A directory of this process's own under DRAPE_TEST_TMP (ctest runs test
-// cases in parallel processes, so the pid keeps them apart).
-fs::path tmp_dir() {
-  const fs::path d = fs::path(DRAPE_TEST_TMP) / ("test_config-" + std::to_string(getpid()));
-  fs::create_directories(d);
-  return d;
-}
+fs::path tmp_dir() { return drape::test::process_tmp_dir("test_config"); }
 
 // A scene file named after the running test, so failures are easy to find.
 std::string write_scene(const std::string& text, const std::string& tag = "") {

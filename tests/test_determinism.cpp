@@ -12,7 +12,7 @@
 
 #include "amrc/criterion.hpp"
 #include "solver/checksum.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

@@ -13,8 +13,8 @@
 #include "amrc/criterion.hpp"
 #include "solver/kernels.hpp"
 #include "solver/multigrid/block_matrix.hpp"
-#include "assembled_check.hpp"
-#include "world.hpp"
+#include "support/assembled_check.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

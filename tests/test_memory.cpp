@@ -8,7 +8,7 @@
 
 #include "amrc/amrc.hpp"
 #include "solver/memory_table.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "decomp/decomposition.hpp"
 #include "solver/memory_table.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

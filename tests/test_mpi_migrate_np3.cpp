@@ -17,7 +17,7 @@
 #include "decomp/partition.hpp"
 #include "decomp/rebalance.hpp"
 #include "solver/model.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

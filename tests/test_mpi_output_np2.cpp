@@ -17,6 +17,7 @@
 
 #include "io/output.hpp"
 #include "mesh/cloth.hpp"
+#include "support/files.hpp"
 
 namespace fs = std::filesystem;
 using namespace drape;
@@ -40,12 +41,7 @@ std::string shared_dir(const std::string& name) {
   return d.string();
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::slurp;
 
 const int NI = 9, NJ = 7;
 

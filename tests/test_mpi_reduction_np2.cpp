@@ -7,7 +7,7 @@
 #include "decomp/collective.hpp"
 #include "decomp/reduction.hpp"
 #include "solver/checksum.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

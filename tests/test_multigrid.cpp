@@ -11,7 +11,7 @@
 #include <random>
 
 #include "solver/multigrid/multigrid.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

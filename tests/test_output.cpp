@@ -17,6 +17,7 @@
 #include "base/error.hpp"
 #include "io/output.hpp"
 #include "mesh/cloth.hpp"
+#include "support/files.hpp"
 
 namespace fs = std::filesystem;
 using namespace drape;
@@ -32,12 +33,7 @@ std::string fresh_dir(const std::string& name) {
 
 bool exists(const std::string& dir, const char* name) { return fs::exists(fs::path(dir) / name); }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::slurp;
 
 // A frame whose every value encodes its particle, component and step, so
 // a value in the wrong place cannot go unnoticed.

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

@@ -12,8 +12,8 @@
 #include <random>
 
 #include "solver/multigrid/block_matrix.hpp"
-#include "assembled_check.hpp"
-#include "world.hpp"
+#include "support/assembled_check.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

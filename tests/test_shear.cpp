@@ -10,7 +10,7 @@
 
 #include "amrc/amrc.hpp"
 #include "solver/shear_cell.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "mesh/quadtree.hpp"
 #include "solver/zigzag.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape {
 namespace {

@@ -5,7 +5,7 @@
 // horizontal. Quasi-static: the velocity is removed after every step.
 #include <cmath>
 
-#include "world.hpp"
+#include "scenes.hpp"
 
 namespace drape::test {
 

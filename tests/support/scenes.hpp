@@ -1,5 +1,5 @@
 #pragma once
-// Scenes and a fabric for solver tests, built into a drape::Simulation.
+// Scenes, a tree and a fabric for solver tests, built into a drape::Simulation.
 #include <cmath>
 #include <random>
 

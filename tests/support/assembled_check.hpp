@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "solver/multigrid/block_matrix.hpp"
-#include "world.hpp"
+#include "scenes.hpp"
 
 namespace drape::test {
 
