@@ -59,7 +59,8 @@ class Simulation {
   // CollectiveError; ends every rank on any other error of one rank.
   int run();
 
-  // The run's phases, in the order run() calls them.
+  // The run's phases, in the order run() reaches them (rebalance through
+  // adapt and next_stage, when the mesh changed).
   void start();             // output files, the first frame, the banner
   StepStats step();         // one time step (stopped: rolled back, nothing counted)
   struct Ending {
