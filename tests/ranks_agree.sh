@@ -4,7 +4,9 @@
 # same drape.h5 datasets, bit for bit, with either solver; and with AMRC on,
 # where the 2- and 4-rank runs must have rebalanced (tiles migrated) at
 # least once. The Newton case runs with the KES reversal and air drag on, so
-# the step-start anchors of the ring's elements read the ghosts too. The
+# the step-start anchors of the ring's elements read the ghosts too; the
+# slope case is it with Newton's slope line search, whose slope is a sum
+# over ranks (its path must differ from the halving one's). The
 # amrc_speed case adds amrc.coarsen_speed, whose speeds each rank computes
 # for its own particles only: it must hold back some merges. The amrc_edges
 # case starts on coarse deflection leaves, so that leaves across the box's
@@ -14,7 +16,7 @@
 # (CASES: some of the cases below, space-separated; default all but amrc_edges,
 # which ctest runs as a test of its own)
 set -euo pipefail
-drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton cg amrc amrc_speed sequence"}
+drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton slope cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 # The final state's kinks (report.json zigzag), counted by each rank over its own particles.
@@ -36,9 +38,10 @@ for method in $cases; do
     amrc_speed) args+=("${amrc[@]}" --set amrc.coarsen_speed=0.01) ;;
     amrc_edges) args+=("${amrc[@]}" "${edges[@]}") ;;
     sequence) args+=("${sequence[@]}") ;;
+    slope) args+=(--set solver.method=newton --set solver.slope_line_search=true) ;;
     *) args+=(--set solver.method=$method) ;;
   esac
-  if [[ $method == newton ]]; then
+  if [[ $method == newton || $method == slope ]]; then
     args+=(--set cloth.bend_reversal=5 --set cloth.shear_reversal=3 --set cloth.stretch_reversal=2 --set solver.drag=3 --set cloth.height=0.43)
   fi
   OMP_NUM_THREADS=1 "$drape" "${args[@]}" --output "$work/$method-1"
@@ -60,6 +63,10 @@ for method in $cases; do
     echo "$method: 1 and $n ranks agree: $one"
   done
   (( $(field "$work/$method-1" iterations) > 0 )) || { echo "$method: no iterations ran"; exit 1; }
+  if [[ $method == slope && -d $work/newton-1 ]]; then
+    [[ $(sum "$work/slope-1") != $(sum "$work/newton-1") ]] ||
+      { echo "slope: the same state as the halving line search: the case does not reach the slope search"; exit 1; }
+  fi
   if [[ $method == amrc_speed ]]; then
     merges() { report "$1" 'r["amrc"]["coarsened"]'; }
     held=$(merges "$work/amrc_speed-1") free=$(merges "$work/amrc-1")

@@ -26,9 +26,10 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 namespace drape::test {
 namespace {
 
-TEST(Allocation, NoneDuringTimeStepsWithAmrc) {
+void expect_no_allocation(bool slope_line_search) {
   Scene s;  // the box scene, small
   s.cloth.particles = {33, 33};
+  s.solver.slope_line_search = slope_line_search;
   s.cloth.tile = 8;
   s.cloth.height = 0.42;
   Simulation w(s, test_fabric());
@@ -64,6 +65,10 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrc) {
   EXPECT_GT(changes, 0) << "the mesh should have adapted while counting";
   EXPECT_GT(iterations, 0) << "the solver should have worked while counting";
 }
+
+TEST(Allocation, NoneDuringTimeStepsWithAmrc) { expect_no_allocation(false); }
+
+TEST(Allocation, NoneWithNewtonsSlopeLineSearch) { expect_no_allocation(true); }
 
 }  // namespace
 }  // namespace drape::test

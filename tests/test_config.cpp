@@ -90,6 +90,7 @@ std::vector<std::string> differences(const Scene& a, const Scene& b) {
   differ(av.method == bv.method, "solver.method");
   differ(av.preconditioner == bv.preconditioner, "solver.preconditioner");
   differ(av.newton_target == bv.newton_target, "solver.newton_target");
+  differ(av.slope_line_search == bv.slope_line_search, "solver.slope_line_search");
   differ(same(av.damping, bv.damping), "solver.damping");
   differ(same(av.rest_speed, bv.rest_speed), "solver.rest_speed");
   differ(same(av.contact_thickness, bv.contact_thickness), "solver.contact_thickness");
@@ -245,6 +246,7 @@ TEST(Config, EveryFieldIsCompared) {
       {"solver.method", "\"cg\""},
       {"solver.preconditioner", "\"multigrid\""},
       {"solver.newton_target", "8"},
+      {"solver.slope_line_search", "true"},
       {"solver.damping", "0.1"},
       {"solver.rest_speed", "0.02"},
       {"solver.contact_thickness", "0.001"},

@@ -91,6 +91,12 @@ void declare_solver(ParameterList& list) {
            "iterations and shrinks (×0.7) above 1.5 times it, after a retry, or past max_iterations/2 linear "
            "iterations ([design.md §6](design.md#6-solvers-the-cost-is-stiff)); with `jacobi` the linear "
            "iterations choose dt")
+      .add("slope_line_search", &SolverSpec::slope_line_search, "", any(),
+           "newton: line search on the energy slope (else backtracking)",
+           "Newton's line search: regula falsi on the slope of the step's energy along the direction, "
+           "which finds where a step that crosses the hysteresis bands' kinks stops descending; false: "
+           "halving from the full step until the cost decreases "
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))")
       .add("damping", &SolverSpec::damping, "", in_half_open(0, 1), "fraction of velocity removed per step",
            "fraction of the velocity removed after each step")
       .add("rest_speed", &SolverSpec::rest_speed, "m/s", non_negative(), "m/s; > 0 stops once at rest",

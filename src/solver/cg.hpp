@@ -20,6 +20,9 @@ struct CgSettings {
   int restart_every = 50;    // steepest-descent restart period
   bool numeric = false;      // finite-difference gradient (reference mode)
   int64_t free_particles = 1;  // global count, normalises the cost
+  // Newton: the line search follows the step's energy slope (SlopeSearch)
+  // instead of halving until the cost decreases.
+  bool slope_search = false;
   // Asked once per iteration; true ends the minimisation (wall-clock budget,
   // signals). Must answer the same on every rank: the caller makes it collective.
   std::function<bool()> stop_requested;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "solver/multigrid/block_matrix.hpp"
+#include "solver/slope_search.hpp"
 
 namespace drape {
 
@@ -205,6 +206,39 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   return it;
 }
 
+// The step's energy slope along the Newton direction at the last evaluated
+// z: d . rho (a fixed-order sum, the same on every rank and thread count).
+double NewtonSolver::slope(const Evaluator& ev) {
+  const double* rho = ev.residual().data();
+  const double* d = d_.data();
+  double g;
+  dots_.tile_sums<1>(c_.layout.tension(), [&](int64_t c, int64_t k, double* acc) { acc[0] += rho[k] * d[c]; }, &g);
+  return g;
+}
+
+// SlopeSearch's trials from a = 1: true with z at the accepted one (its cost
+// in res.cost and c0). False when its trials ran out or the direction does
+// not descend; z is then at some trial, and the caller backtracks.
+template <class Trial>
+bool NewtonSolver::slope_search(Evaluator& ev, Trial&& trial, CgResult& res, double& c0) {
+  SlopeSearch search(slope(ev));
+  if (!search.usable()) return false;
+  double a = 1.0;
+  for (int t = 0; t < SlopeSearch::kTrials && a > 0; ++t) {
+    const CostTerms cost = trial(a);
+    const double g = slope(ev);
+    a = search.accepts(g) ? 0.0 : search.next(a, g);
+    // Flat enough, or the longest step and still descending (a = 0 either
+    // way): taken if its cost is finite, and in the second case lower.
+    if (a == 0 && std::isfinite(cost.total()) && (search.accepts(g) || cost.total() < c0)) {
+      res.cost = cost;
+      c0 = cost.total();
+      return true;
+    }
+  }
+  return false;
+}
+
 CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
                                 const std::function<void(int, double)>& on_iteration) {
   const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
@@ -237,22 +271,24 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // d_ solves K d = -rho, rho the evaluator's residual in F0 units: the
     // position step is d * F0.
     const double scale = ev.force_scale();
-    bool accepted = false;
     // Trials in place: each evaluation brings z's ghosts and hanging particles
     // up to date and sets the element forces from the positions, so only the
     // free particles' positions are saved and restored (a whole-array copy
     // would cost the finest mesh's price on a coarse one).
     dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
-    for (double a = 1.0; a > 1e-4; a *= 0.5) {
+    auto trial = [&](double a) {
       ScopedPhase ph(tm, kLineSearch);
       dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c] + a * scale * d_[c]; });
-      const CostTerms trial = ev.settled_cost(z);
       ++res.evaluations;
-      if (std::isfinite(trial.total()) && trial.total() < c0) {
-        res.cost = trial;
-        c0 = trial.total();
+      return ev.settled_cost(z);
+    };
+    bool accepted = st.slope_search && slope_search(ev, trial, res, c0);
+    for (double a = 1.0; !accepted && a > 1e-4; a *= 0.5) {
+      const CostTerms t = trial(a);
+      if (std::isfinite(t.total()) && t.total() < c0) {
+        res.cost = t;
+        c0 = t.total();
         accepted = true;
-        break;
       }
     }
     if (!accepted) {

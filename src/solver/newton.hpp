@@ -4,8 +4,9 @@
 // solution as the paper's CG on the total cost, but each Newton step solves
 // K d = -r by preconditioned linear CG, whose convergence depends on the
 // condition number of K, not its square as for CG on a least-squares cost
-// (docs/design.md §6). A backtracking line search on the cost keeps every accepted
-// step a decrease.
+// (docs/design.md §6). The line search: backtracking on the cost, each
+// accepted step a decrease, or (CgSettings::slope_search) regula falsi on the
+// step's energy slope along the direction (solver/slope_search.hpp).
 #include <functional>
 #include <vector>
 
@@ -52,6 +53,9 @@ class NewtonSolver {
 
  private:
   void setup_multigrid(Evaluator& ev);
+  double slope(const Evaluator& ev);
+  template <class Trial>
+  bool slope_search(Evaluator& ev, Trial&& trial, CgResult& res, double& c0);
   bool multigrid_stale(const Evaluator& ev) const;
 
   const Cloth& c_;

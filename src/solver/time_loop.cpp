@@ -237,6 +237,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   cs.tolerance = spec_.tolerance;
   cs.numeric = spec_.gradient == GradientMode::Numeric;
   cs.free_particles = free_;
+  cs.slope_search = spec_.slope_line_search;
   // A one-pointer capture: no allocation, whatever stop_requested holds.
   cs.stop_requested = [this] { return stop_requested && stop_requested(); };
   CgResult r;
