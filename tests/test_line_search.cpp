@@ -13,7 +13,7 @@
 
 #include "solver/checksum.hpp"
 #include "solver/slope_search.hpp"
-#include "world.hpp"
+#include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {
@@ -108,7 +108,7 @@ Outcome drape(bool slope, int threads, int steps) {
   s.solver.preconditioner = Preconditioner::Multigrid;
   s.solver.slope_line_search = slope;
   omp_set_num_threads(threads);
-  World w(s, test_fabric());
+  Simulation w(s, test_fabric());
   Timers tm;
   Outcome out;
   for (int k = 0; k < steps; ++k) {
@@ -119,7 +119,7 @@ Outcome drape(bool slope, int threads, int steps) {
   }
   std::vector<int> all;
   for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
-  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red).hex();
+  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
   return out;
 }
 
