@@ -210,12 +210,43 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
 }
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
-  const int d = int(s & 1);
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V g[3];
   const V n = load3<double>(&c_.bend_axis[3 * s]);
   const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
+  triple_band(s, pos, th, g, z, settle);
+}
+
+void Evaluator::triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const {
+  for (int l = 0; l < 4; ++l) {
+    const int64_t s = run.items[k + l];
+    triple_ids(s, run.base + k + l, ids[l]);
+    t.a[l] = at(z, ids[l][0]);
+    t.b[l] = at(z, ids[l][1]);
+    t.c[l] = at(z, ids[l][2]);
+    t.n[l] = load3<double>(&c_.bend_axis[3 * s]);
+  }
+}
+
+void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settle) {
+  in_fours(
+      run,
+      [&](int64_t k) {
+        TripleFour t;
+        int64_t ids[4][3];
+        triple_four(run, k, z, t, ids);
+        V g[4][3];
+        double sn[4], co[4];
+        bend_terms_four(t, g, sn, co);
+        for (int l = 0; l < 4; ++l)
+          triple_band(run.items[k + l], run.base + k + l, std::atan2(sn[l], co[l]), g[l], z, settle);
+      },
+      [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
+}
+
+void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], const double* z, double* settle) {
+  const int d = int(s & 1);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
@@ -323,6 +354,27 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_, ids[k]);
   V g[3], hr[3];
   bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), r, g, hr);
+  triple_gradient_out(s, pos, r, g, hr, z, grad);
+}
+
+void Evaluator::triple_gradient(const ItemRun& run, const double* z, double* grad) {
+  in_fours(
+      run,
+      [&](int64_t k) {
+        TripleFour t;
+        int64_t ids[4][3];
+        triple_four(run, k, z, t, ids);
+        V r[4][3], g[4][3], hr[4][3];
+        for (int l = 0; l < 4; ++l)
+          for (int i = 0; i < 3; ++i) r[l][i] = residual_of(c_, rho_, ids[l][i]);
+        bend_gradient_hv_four(t, r, g, hr);
+        for (int l = 0; l < 4; ++l) triple_gradient_out(run.items[k + l], run.base + k + l, r[l], g[l], hr[l], z, grad);
+      },
+      [&](int64_t k) { triple_gradient(run.items[k], run.base + k, z, grad); });
+}
+
+void Evaluator::triple_gradient_out(int64_t s, int64_t pos, const V r[3], const V g[3], const V hr[3],
+                                    const double* z, double* grad) {
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
   const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
@@ -392,7 +444,7 @@ CostTerms Evaluator::reduce_costs() {
 // residual. settle: see settled_cost.
 CostTerms Evaluator::cost_pass(double* z, double* settle) {
   elements_then_particles([&](int64_t s, int64_t pos) { edge_forces(s, pos, z, settle); },
-                          [&](int64_t s, int64_t pos) { triple_forces(s, pos, z, settle); },
+                          [&](const ItemRun& run) { triple_forces(run, z, settle); },
                           [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
   clear_hanging(hres_);
@@ -448,7 +500,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   // The element passes and the particles' gathers in one parallel region,
   // as the cost pass (a fork and join each cost more than a small mesh's pass).
   elements_then_particles([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); },
-                          [&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); },
+                          [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
                           [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
   // A hanging particle's gradient: its contact term and its elements'.

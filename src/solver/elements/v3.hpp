@@ -21,6 +21,10 @@ template <class T>
 inline V3<T> cross(const V3<T>& a, const V3<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
+// A constant as the scalar T (lanes.hpp: in every lane), so that one kernel
+// text serves double, Dual and four-lane vectors alike.
+template <class T>
+inline T num(double a) { return T(a); }
 template <class T>
 inline V3<T> load3(const double* p) { return {T(p[0]), T(p[1]), T(p[2])}; }
 inline V3<Dual> load3(const double* p, const double* v) {
