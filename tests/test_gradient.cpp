@@ -378,6 +378,38 @@ TEST(TripleLanes, FourTriplesAreTheScalarKernelsBitForBit) {
   }
 }
 
+// Four edges side by side (edge_length_four, edge_length_hv_four) give each
+// edge's scalar kernel numbers bit for bit: the length, the gradient and the
+// Hessian along the ends' moves, four different edges at a time, short and
+// long, stretched along any direction.
+TEST(EdgeLanes, FourEdgesAreTheScalarKernelsBitForBit) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; };
+  for (int sample = 0; sample < 2000; ++sample) {
+    EdgeFour e;
+    V3<double> v[4];
+    for (int l = 0; l < 4; ++l) {
+      const double h = (sample + l) % 2 ? 1e-3 : 3e-2, amount = (sample + l) % 3 == 0 ? 0.05 : 0.9;
+      e.a[l] = {h * amount * u(rng), h * amount * u(rng), h * amount * u(rng)};
+      e.b[l] = {h * (1 + amount * u(rng)), h * amount * u(rng), h * amount * u(rng)};
+      v[l] = {u(rng), u(rng), u(rng)};
+    }
+    V3<double> g[4][2], gh[4][2], hv[4];
+    double L[4], Lh[4];
+    edge_length_four(e, g, L);
+    edge_length_hv_four(e, v, gh, Lh, hv);
+    for (int l = 0; l < 4; ++l) {
+      V3<double> g1[2], gh1[2], hv1;
+      const double L1 = edge_length(e.a[l], e.b[l], g1), Lh1 = edge_length_hv(e.a[l], e.b[l], v[l], gh1, hv1);
+      ASSERT_TRUE(same(&L[l], &L1, sizeof L1) && same(&Lh[l], &Lh1, sizeof L1)) << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(g[l], g1, sizeof g1) && same(gh[l], gh1, sizeof g1) && same(gh1, g1, sizeof g1))
+          << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(&hv[l], &hv1, sizeof hv1)) << "sample " << sample << " lane " << l;
+    }
+  }
+}
+
 // A run-taking loop body (ItemRun) sees every item once, in fours and then
 // one by one, whatever the run's length and start.
 TEST(TripleLanes, InFoursVisitsEachItemOnce) {

@@ -25,6 +25,8 @@ template <>
 inline D4 num<D4>(double a) { return splat4(a); }
 
 inline D4 sqrt4(D4 a) { return (D4)_mm256_sqrt_pd((__m256d)a); }
+template <>
+inline D4 root<D4>(D4 a) { return sqrt4(a); }
 
 // The vectors p[i0..i3] as lanes.
 inline V4 lanes4(const V3<double> p[4], int i0, int i1, int i2, int i3) {

@@ -1,6 +1,8 @@
 #pragma once
 // Three-vectors for the element kernels, templated on the scalar (double, or
 // Dual for the reference Hessian-vector products).
+#include <cmath>
+
 #include "solver/dual.hpp"
 
 namespace drape {
@@ -25,6 +27,12 @@ inline V3<T> cross(const V3<T>& a, const V3<T>& b) {
 // text serves double, Dual and four-lane vectors alike.
 template <class T>
 inline T num(double a) { return T(a); }
+// Square root of the scalar T (lanes.hpp: lane by lane).
+template <class T>
+inline T root(T a) {
+  using std::sqrt;
+  return sqrt(a);
+}
 template <class T>
 inline V3<T> load3(const double* p) { return {T(p[0]), T(p[1]), T(p[2])}; }
 inline V3<Dual> load3(const double* p, const double* v) {
