@@ -1,11 +1,11 @@
 #pragma once
 // Four doubles as one value (GCC's and Clang's vector extension), for the
 // kernels that compute four like things side by side (a shear cell's
-// corners, four triples). Every lane does the scalar kernel's operations in its order:
-// IEEE division and square root round alike in either form and
-// -ffp-contract=off keeps products and sums apart, so the lanes give the
-// scalar results bit for bit, with one vector division or square root in
-// place of four dependent scalar ones.
+// corners, four triples, four edges). Every lane does the scalar kernel's
+// operations in its order: IEEE division and square root round alike in
+// either form and -ffp-contract=off keeps products and sums apart, so the
+// lanes give the scalar results bit for bit, with one vector division or
+// square root in place of four dependent scalar ones.
 // With AVX only (the build's -march=native has it where the CPU does):
 // without it a 32-byte vector would pass in memory, and the kernels take
 // their scalar forms, the same numbers. DRAPE_LANES says which.
