@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <random>
 
 #include "amrc/criterion.hpp"
 #include "solver/kernels.hpp"
+#include "solver/loops.hpp"
 #include "solver/multigrid/block_matrix.hpp"
 #include "support/assembled_check.hpp"
 #include "support/scenes.hpp"
@@ -329,6 +331,101 @@ TEST(ElementKernels, HandDerivedHessianVectorMatchesDualReference) {
     expect_hv_matches(gc, hc, gcd, 4, sample);
     if (HasFailure()) return;  // one sample's report is enough
   }
+}
+
+// Four triples side by side (bend_terms_four, bend_gradient_hv_four: in the
+// lanes of a 4-double vector where the build has them) give each triple's
+// scalar kernel numbers bit for bit: the atan2 arguments, the gradient and
+// H r, four different triples at a time (a lane mixed up with another
+// differs), straight to sharply bent, at the finest mesh's scale and a
+// coarse one's, about axes near the cloth's normal.
+TEST(TripleLanes, FourTriplesAreTheScalarKernelsBitForBit) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; };
+  for (int sample = 0; sample < 2000; ++sample) {
+    TripleFour t;
+    V3<double> r[4][3];
+    for (int l = 0; l < 4; ++l) {
+      const double amount = (sample + l) % 3 == 0 ? 0.05 : (sample + l) % 3 == 1 ? 0.4 : 0.9;
+      const double h = (sample + l) % 2 ? 1e-3 : 3e-2;
+      auto jitter = [&](double x) {
+        return V3<double>{h * (x + amount * u(rng)), h * amount * u(rng), h * amount * u(rng)};
+      };
+      t.a[l] = jitter(-1);
+      t.b[l] = jitter(0);
+      t.c[l] = jitter(1);
+      V3<double> n{0.3 * u(rng), 0.3 * u(rng), 1.0};
+      t.n[l] = (1.0 / std::sqrt(dot(n, n))) * n;
+      for (V3<double>& rk : r[l]) rk = {u(rng), u(rng), u(rng)};
+    }
+    V3<double> g[4][3], hr[4][3];
+    double s[4], co[4];
+    bend_terms_four(t, g, s, co);
+    V3<double> gh[4][3];
+    bend_gradient_hv_four(t, r, gh, hr);
+    for (int l = 0; l < 4; ++l) {
+      V3<double> g1[3], gh1[3], hr1[3];
+      double s1, co1;
+      bend_terms(t.a[l], t.b[l], t.c[l], t.n[l], g1, s1, co1);
+      bend_gradient_hv(t.a[l], t.b[l], t.c[l], t.n[l], r[l], gh1, hr1);
+      ASSERT_TRUE(same(&s[l], &s1, sizeof s1) && same(&co[l], &co1, sizeof co1))
+          << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(g[l], g1, sizeof g1)) << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(gh[l], gh1, sizeof gh1) && same(gh[l], g1, sizeof g1)) << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(hr[l], hr1, sizeof hr1)) << "sample " << sample << " lane " << l;
+    }
+  }
+}
+
+// Four edges side by side (edge_length_four, edge_length_hv_four) give each
+// edge's scalar kernel numbers bit for bit: the length, the gradient and the
+// Hessian along the ends' moves, four different edges at a time, short and
+// long, stretched along any direction.
+TEST(EdgeLanes, FourEdgesAreTheScalarKernelsBitForBit) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; };
+  for (int sample = 0; sample < 2000; ++sample) {
+    EdgeFour e;
+    V3<double> v[4];
+    for (int l = 0; l < 4; ++l) {
+      const double h = (sample + l) % 2 ? 1e-3 : 3e-2, amount = (sample + l) % 3 == 0 ? 0.05 : 0.9;
+      e.a[l] = {h * amount * u(rng), h * amount * u(rng), h * amount * u(rng)};
+      e.b[l] = {h * (1 + amount * u(rng)), h * amount * u(rng), h * amount * u(rng)};
+      v[l] = {u(rng), u(rng), u(rng)};
+    }
+    V3<double> g[4][2], gh[4][2], hv[4];
+    double L[4], Lh[4];
+    edge_length_four(e, g, L);
+    edge_length_hv_four(e, v, gh, Lh, hv);
+    for (int l = 0; l < 4; ++l) {
+      V3<double> g1[2], gh1[2], hv1;
+      const double L1 = edge_length(e.a[l], e.b[l], g1), Lh1 = edge_length_hv(e.a[l], e.b[l], v[l], gh1, hv1);
+      ASSERT_TRUE(same(&L[l], &L1, sizeof L1) && same(&Lh[l], &Lh1, sizeof L1)) << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(g[l], g1, sizeof g1) && same(gh[l], gh1, sizeof g1) && same(gh1, g1, sizeof g1))
+          << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(&hv[l], &hv1, sizeof hv1)) << "sample " << sample << " lane " << l;
+    }
+  }
+}
+
+// A run-taking loop body (ItemRun) sees every item once, in fours and then
+// one by one, whatever the run's length and start.
+TEST(TripleLanes, InFoursVisitsEachItemOnce) {
+  for (int64_t begin = 0; begin < 5; ++begin)
+    for (int64_t len = 0; len < 11; ++len) {
+      std::vector<int> seen(size_t(begin + len), 0);
+      int fours = 0;
+      in_fours(ItemRun{nullptr, begin, begin + len, 0},
+               [&](int64_t k) {
+                 ++fours;
+                 for (int l = 0; l < 4; ++l) ++seen[size_t(k + l)];
+               },
+               [&](int64_t k) { ++seen[size_t(k)]; });
+      EXPECT_EQ(fours, len / 4) << "begin " << begin << " length " << len;
+      for (int64_t k = 0; k < begin + len; ++k) EXPECT_EQ(seen[size_t(k)], k >= begin ? 1 : 0) << "item " << k;
+    }
 }
 
 // Newton's K (Evaluator::stiffness_product, matrix-free, its element passes

@@ -187,11 +187,39 @@ void Evaluator::list_rows() {
 // ---- pass 1: element forces and band costs -------------------------------
 
 void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* settle) {
+  V g[2];
+  const double L = edge_length(at(z, s >> 1), at(z, nb_e_[pos]), g);
+  edge_band(s, pos, L, g, z, settle);
+}
+
+void Evaluator::edge_four(const ItemRun& run, int64_t k, const double* z, EdgeFour& e, int64_t ends[4][2]) const {
+  for (int l = 0; l < 4; ++l) {
+    ends[l][0] = run.items[k + l] >> 1;
+    ends[l][1] = nb_e_[run.base + k + l];
+    e.a[l] = at(z, ends[l][0]);
+    e.b[l] = at(z, ends[l][1]);
+  }
+}
+
+void Evaluator::edge_forces(const ItemRun& run, const double* z, double* settle) {
+  in_fours(
+      run,
+      [&](int64_t k) {
+        EdgeFour e;
+        int64_t ends[4][2];
+        edge_four(run, k, z, e, ends);
+        V g[4][2];
+        double L[4];
+        edge_length_four(e, g, L);
+        for (int l = 0; l < 4; ++l) edge_band(run.items[k + l], run.base + k + l, L[l], g[l], z, settle);
+      },
+      [&](int64_t k) { edge_forces(run.items[k], run.base + k, z, settle); });
+}
+
+void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const double* z, double* settle) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   const int64_t q = nb_e_[pos];
-  V g[2];
-  const double L = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
@@ -210,12 +238,43 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
 }
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
-  const int d = int(s & 1);
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V g[3];
   const V n = load3<double>(&c_.bend_axis[3 * s]);
   const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
+  triple_band(s, pos, th, g, z, settle);
+}
+
+void Evaluator::triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const {
+  for (int l = 0; l < 4; ++l) {
+    const int64_t s = run.items[k + l];
+    triple_ids(s, run.base + k + l, ids[l]);
+    t.a[l] = at(z, ids[l][0]);
+    t.b[l] = at(z, ids[l][1]);
+    t.c[l] = at(z, ids[l][2]);
+    t.n[l] = load3<double>(&c_.bend_axis[3 * s]);
+  }
+}
+
+void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settle) {
+  in_fours(
+      run,
+      [&](int64_t k) {
+        TripleFour t;
+        int64_t ids[4][3];
+        triple_four(run, k, z, t, ids);
+        V g[4][3];
+        double sn[4], co[4];
+        bend_terms_four(t, g, sn, co);
+        for (int l = 0; l < 4; ++l)
+          triple_band(run.items[k + l], run.base + k + l, std::atan2(sn[l], co[l]), g[l], z, settle);
+      },
+      [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
+}
+
+void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], const double* z, double* settle) {
+  const int d = int(s & 1);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
@@ -302,14 +361,37 @@ inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) 
 void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   const int64_t p = s >> 1;
   const int64_t q = nb_e_[pos];
-  V g[2];
-  const V xa = at(z, p), xb = at(z, q);
-  const double L = edge_length(xa, xb, g);
-  const double w = c_.edge_width[s], f = z[c_.layout.tension() + s];
   const V ra = residual_of(c_, rho_, p), rb = residual_of(c_, rho_, q);
-  // Hessian of the length times (rb - ra): (v - u (u.v)) / L.
-  const V v = rb - ra;
-  const V hv = (1.0 / L) * (v - dot(g[1], v) * g[1]);
+  V g[2], hv;
+  edge_length_hv(at(z, p), at(z, q), rb - ra, g, hv);
+  edge_gradient_out(s, pos, ra, rb, g, hv, z, grad);
+}
+
+void Evaluator::edge_gradient(const ItemRun& run, const double* z, double* grad) {
+  in_fours(
+      run,
+      [&](int64_t k) {
+        EdgeFour e;
+        int64_t ends[4][2];
+        edge_four(run, k, z, e, ends);
+        V ra[4], rb[4], v[4], g[4][2], hv[4];
+        for (int l = 0; l < 4; ++l) {
+          ra[l] = residual_of(c_, rho_, ends[l][0]);
+          rb[l] = residual_of(c_, rho_, ends[l][1]);
+          v[l] = rb[l] - ra[l];
+        }
+        double L[4];
+        edge_length_hv_four(e, v, g, L, hv);
+        for (int l = 0; l < 4; ++l)
+          edge_gradient_out(run.items[k + l], run.base + k + l, ra[l], rb[l], g[l], hv[l], z, grad);
+      },
+      [&](int64_t k) { edge_gradient(run.items[k], run.base + k, z, grad); });
+}
+
+// hv: the length's Hessian times (rb - ra).
+void Evaluator::edge_gradient_out(int64_t s, int64_t pos, const V& ra, const V& rb, const V g[2], const V& hv,
+                                  const double* z, double* grad) {
+  const double w = c_.edge_width[s], f = z[c_.layout.tension() + s];
   const double fw = f * w / m_.force_scale, gq = gq_e_[pos];
   put(&buf_e_[kEdgeSlot * pos], (-fw) * hv + gq * g[0], 1.0);
   put(&buf_e_[kEdgeSlot * pos + 3], fw * hv + gq * g[1], 1.0);
@@ -323,6 +405,27 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_, ids[k]);
   V g[3], hr[3];
   bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), r, g, hr);
+  triple_gradient_out(s, pos, r, g, hr, z, grad);
+}
+
+void Evaluator::triple_gradient(const ItemRun& run, const double* z, double* grad) {
+  in_fours(
+      run,
+      [&](int64_t k) {
+        TripleFour t;
+        int64_t ids[4][3];
+        triple_four(run, k, z, t, ids);
+        V r[4][3], g[4][3], hr[4][3];
+        for (int l = 0; l < 4; ++l)
+          for (int i = 0; i < 3; ++i) r[l][i] = residual_of(c_, rho_, ids[l][i]);
+        bend_gradient_hv_four(t, r, g, hr);
+        for (int l = 0; l < 4; ++l) triple_gradient_out(run.items[k + l], run.base + k + l, r[l], g[l], hr[l], z, grad);
+      },
+      [&](int64_t k) { triple_gradient(run.items[k], run.base + k, z, grad); });
+}
+
+void Evaluator::triple_gradient_out(int64_t s, int64_t pos, const V r[3], const V g[3], const V hr[3],
+                                    const double* z, double* grad) {
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
   const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
@@ -391,8 +494,8 @@ CostTerms Evaluator::reduce_costs() {
 // The cost pass: element forces and band costs, then each particle's
 // residual. settle: see settled_cost.
 CostTerms Evaluator::cost_pass(double* z, double* settle) {
-  elements_then_particles([&](int64_t s, int64_t pos) { edge_forces(s, pos, z, settle); },
-                          [&](int64_t s, int64_t pos) { triple_forces(s, pos, z, settle); },
+  elements_then_particles([&](const ItemRun& run) { edge_forces(run, z, settle); },
+                          [&](const ItemRun& run) { triple_forces(run, z, settle); },
                           [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
   clear_hanging(hres_);
@@ -447,8 +550,8 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
   // The element passes and the particles' gathers in one parallel region,
   // as the cost pass (a fork and join each cost more than a small mesh's pass).
-  elements_then_particles([&](int64_t s, int64_t pos) { edge_gradient(s, pos, z, grad); },
-                          [&](int64_t s, int64_t pos) { triple_gradient(s, pos, z, grad); },
+  elements_then_particles([&](const ItemRun& run) { edge_gradient(run, z, grad); },
+                          [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
                           [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
   // A hanging particle's gradient: its contact term and its elements'.

@@ -18,6 +18,7 @@
 
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
+#include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
 #include "solver/loops.hpp"
 #include "solver/memory_table.hpp"
@@ -26,6 +27,9 @@
 #include "solver/self_contact.hpp"
 
 namespace drape {
+
+struct EdgeFour;    // elements/edge_K.hpp
+struct TripleFour;  // elements/triple_K.hpp
 
 struct BlockMatrix;
 
@@ -139,7 +143,19 @@ class Evaluator {
   // With settle (z itself), the element's force there is first set to its
   // hysteresis target at z's positions (settled_cost).
   void edge_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  // A run of the edges' list, four edges' lengths at a time (EdgeFour).
+  void edge_forces(const ItemRun& run, const double* z, double* settle);
+  // The edge's band, force and cost from its length L and its gradient g.
+  void edge_band(int64_t s, int64_t pos, double L, const V3<double> g[2], const double* z, double* settle);
+  // The four edges at run positions k..k+3: their ends' positions, their ends.
+  void edge_four(const ItemRun& run, int64_t k, const double* z, EdgeFour& e, int64_t ends[4][2]) const;
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  // A run of the triples' list, four triples' angles at a time (TripleFour).
+  void triple_forces(const ItemRun& run, const double* z, double* settle);
+  // The triple's band, force and cost from its angle th and its gradient g.
+  void triple_band(int64_t s, int64_t pos, double th, const V3<double> g[3], const double* z, double* settle);
+  // The four triples at run positions k..k+3: their positions and axes, their particles.
+  void triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const;
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   CostTerms cost_pass(double* z, double* settle);
   void size_slopes();
@@ -157,7 +173,15 @@ class Evaluator {
   void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void particle_residual(int64_t p, const GatherRow& row, const double* z);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
+  void edge_gradient(const ItemRun& run, const double* z, double* grad);
+  void edge_gradient_out(int64_t s, int64_t pos, const V3<double>& ra, const V3<double>& rb, const V3<double> g[2],
+                         const V3<double>& hv, const double* z, double* grad);
   void triple_gradient(int64_t s, int64_t pos, const double* z, double* grad);
+  void triple_gradient(const ItemRun& run, const double* z, double* grad);
+  // The triple's buffer entries and force gradient from its particles'
+  // residuals r, its angle's gradient g and H r.
+  void triple_gradient_out(int64_t s, int64_t pos, const V3<double> r[3], const V3<double> g[3],
+                           const V3<double> hr[3], const double* z, double* grad);
   void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad);
   // Element passes: this rank's elements, then the ghost ring's (split in

@@ -89,6 +89,34 @@ inline void visit_item(F& f, const int64_t* items, int64_t k, int64_t base) {
     f(items[k]);
 }
 
+// A run of a list, positions [begin, end) of items, handed whole to a body
+// that takes one (so that it may take its items four at a time); base + k
+// is item k's place in the element buffers.
+struct ItemRun {
+  const int64_t* items;
+  int64_t begin, end, base;
+};
+
+// Runs a loop body on items[k0..k1): whole, if it takes an ItemRun, else
+// item by item.
+template <class F>
+inline void visit_run(F& f, const int64_t* items, int64_t k0, int64_t k1, int64_t base) {
+  if constexpr (std::is_invocable_v<F&, const ItemRun&>) {
+    if (k0 < k1) f(ItemRun{items, k0, k1, base});
+  } else {
+    for (int64_t k = k0; k < k1; ++k) visit_item(f, items, k, base);
+  }
+}
+
+// Calls four(k) for each k = begin, begin + 4, ... with four items left in
+// the run, then one(k) for each of the rest.
+template <class Four, class One>
+inline void in_fours(const ItemRun& run, Four&& four, One&& one) {
+  int64_t k = run.begin;
+  for (; k + 4 <= run.end; k += 4) four(k);
+  for (; k < run.end; ++k) one(k);
+}
+
 struct LoopPolicy {
   Schedule schedule = Schedule::ActiveLists;
   int chunk = 4;  // tiles per chunk (dynamic)
@@ -128,7 +156,8 @@ ListCuts& cuts_for(const ActiveList& list) {
 // this kind of pass (c.rebalance() after the region), then the list's tail in
 // small pieces to whichever thread is free. Otherwise whole tiles, with
 // OpenMP's static, dynamic or guided schedule.
-// Positions handed to the body count from `base`.
+// Positions handed to the body count from `base`; a body that takes an
+// ItemRun gets each chunk, piece or tile whole.
 template <class F>
 void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& f, int64_t base = 0) {
   const int64_t* items = list.items.data();
@@ -142,14 +171,13 @@ void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& 
 #pragma omp for schedule(static, 1) nowait
     for (int q = 0; q < chunks; ++q) {
       const double t0 = omp_get_wtime();
-      for (int64_t k = cut[q]; k < cut[q + 1]; ++k) visit_item(f, items, k, base);
+      visit_run(f, items, cut[q], cut[q + 1], base);
       seconds[q] = omp_get_wtime() - t0;
     }
     // The tail, taken piece by piece by whoever is done first.
 #pragma omp for schedule(dynamic, 1) nowait
     for (int q = 0; q < pieces; ++q)
-      for (int64_t k = head + tail * q / pieces; k < head + tail * (q + 1) / pieces; ++k)
-        visit_item(f, items, k, base);
+      visit_run(f, items, head + tail * q / pieces, head + tail * (q + 1) / pieces, base);
     return;
   }
   const int nt = int(list.tile_begin.size()) - 1;
@@ -160,17 +188,17 @@ void item_loops(const ActiveList& list, const LoopPolicy& pol, ListCuts& c, F&& 
     case Schedule::Static:
 #pragma omp for schedule(static) nowait
       for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) visit_item(f, items, k, base);
+        visit_run(f, items, tb[t], tb[t + 1], base);
       break;
     case Schedule::Dynamic:
 #pragma omp for schedule(dynamic, chunk) nowait
       for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) visit_item(f, items, k, base);
+        visit_run(f, items, tb[t], tb[t + 1], base);
       break;
     case Schedule::Guided:
 #pragma omp for schedule(guided) nowait
       for (int t = 0; t < nt; ++t)
-        for (int64_t k = tb[t]; k < tb[t + 1]; ++k) visit_item(f, items, k, base);
+        visit_run(f, items, tb[t], tb[t + 1], base);
       break;
   }
 }

@@ -3,6 +3,7 @@
 // Evaluator's loops gather and scatter; these compute one element.
 #include <cmath>
 
+#include "solver/elements/lanes.hpp"
 #include "solver/elements/v3.hpp"
 
 namespace drape {
@@ -10,13 +11,59 @@ namespace drape {
 // Edge a-b: k = |xb - xa|; grad = [-u, u].
 template <class T>
 inline T edge_length(const V3<T>& a, const V3<T>& b, V3<T> g[2]) {
-  using std::sqrt;
   const V3<T> e = b - a;
-  const T L = sqrt(dot(e, e));
-  const V3<T> u = (T(1) / L) * e;
-  g[0] = T(-1) * u;
+  const T L = root(dot(e, e));
+  const V3<T> u = (num<T>(1.0) / L) * e;
+  g[0] = num<T>(-1.0) * u;
   g[1] = u;
   return L;
+}
+
+// edge_length, and its Hessian times the ends' moves' difference v = rb - ra:
+// hv = (v - u (u.v)) / L (the derivative of u along v).
+template <class T>
+inline T edge_length_hv(const V3<T>& a, const V3<T>& b, const V3<T>& v, V3<T> g[2], V3<T>& hv) {
+  const T L = edge_length(a, b, g);
+  hv = (num<T>(1.0) / L) * (v - dot(g[1], v) * g[1]);
+  return L;
+}
+
+// Four edges side by side: edge k's ends a[k], b[k] (and moves' difference
+// v[k]) in lane k, the scalar kernels' numbers bit for bit (tests:
+// EdgeLanes.*): one vector square root and division for four. Without
+// DRAPE_LANES, the scalar kernels one edge after another.
+struct EdgeFour {
+  V3<double> a[4], b[4];
+};
+
+inline void edge_length_four(const EdgeFour& e, V3<double> g[4][2], double L[4]) {
+#if DRAPE_LANES
+  V4 g4[2];
+  const D4 L4 = edge_length(lanes4(e.a), lanes4(e.b), g4);
+  for (int k = 0; k < 4; ++k) {
+    g[k][0] = lane(g4[0], k);
+    g[k][1] = lane(g4[1], k);
+    L[k] = L4[k];
+  }
+#else
+  for (int k = 0; k < 4; ++k) L[k] = edge_length(e.a[k], e.b[k], g[k]);
+#endif
+}
+
+inline void edge_length_hv_four(const EdgeFour& e, const V3<double> v[4], V3<double> g[4][2], double L[4],
+                                V3<double> hv[4]) {
+#if DRAPE_LANES
+  V4 g4[2], h4;
+  const D4 L4 = edge_length_hv(lanes4(e.a), lanes4(e.b), lanes4(v), g4, h4);
+  for (int k = 0; k < 4; ++k) {
+    g[k][0] = lane(g4[0], k);
+    g[k][1] = lane(g4[1], k);
+    L[k] = L4[k];
+    hv[k] = lane(h4, k);
+  }
+#else
+  for (int k = 0; k < 4; ++k) L[k] = edge_length_hv(e.a[k], e.b[k], v[k], g[k], hv[k]);
+#endif
 }
 
 // The edge's kept numbers for Newton's stiffness (Evaluator::edge_kept

@@ -1,11 +1,11 @@
 #pragma once
 // Four doubles as one value (GCC's and Clang's vector extension), for the
 // kernels that compute four like things side by side (a shear cell's
-// corners). Every lane does the scalar kernel's operations in its order:
-// IEEE division and square root round alike in either form and
-// -ffp-contract=off keeps products and sums apart, so the lanes give the
-// scalar results bit for bit, with one vector division or square root in
-// place of four dependent scalar ones.
+// corners, four triples, four edges). Every lane does the scalar kernel's
+// operations in its order: IEEE division and square root round alike in
+// either form and -ffp-contract=off keeps products and sums apart, so the
+// lanes give the scalar results bit for bit, with one vector division or
+// square root in place of four dependent scalar ones.
 // With AVX only (the build's -march=native has it where the CPU does):
 // without it a 32-byte vector would pass in memory, and the kernels take
 // their scalar forms, the same numbers. DRAPE_LANES says which.
@@ -21,8 +21,12 @@ typedef double D4 __attribute__((vector_size(32)));
 using V4 = V3<D4>;  // lane k: the k-th of the four vectors
 
 inline D4 splat4(double a) { return D4{a, a, a, a}; }
+template <>
+inline D4 num<D4>(double a) { return splat4(a); }
 
 inline D4 sqrt4(D4 a) { return (D4)_mm256_sqrt_pd((__m256d)a); }
+template <>
+inline D4 root<D4>(D4 a) { return sqrt4(a); }
 
 // The vectors p[i0..i3] as lanes.
 inline V4 lanes4(const V3<double> p[4], int i0, int i1, int i2, int i3) {
@@ -30,6 +34,8 @@ inline V4 lanes4(const V3<double> p[4], int i0, int i1, int i2, int i3) {
           D4{p[i0].z, p[i1].z, p[i2].z, p[i3].z}};
 }
 inline V3<double> lane(const V4& a, int k) { return {a.x[k], a.y[k], a.z[k]}; }
+// Four vectors, the k-th in lane k.
+inline V4 lanes4(const V3<double> p[4]) { return lanes4(p, 0, 1, 2, 3); }
 
 }  // namespace drape
 #else

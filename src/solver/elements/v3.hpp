@@ -1,6 +1,8 @@
 #pragma once
 // Three-vectors for the element kernels, templated on the scalar (double, or
 // Dual for the reference Hessian-vector products).
+#include <cmath>
+
 #include "solver/dual.hpp"
 
 namespace drape {
@@ -20,6 +22,16 @@ inline T dot(const V3<T>& a, const V3<T>& b) { return a.x * b.x + a.y * b.y + a.
 template <class T>
 inline V3<T> cross(const V3<T>& a, const V3<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+// A constant as the scalar T (lanes.hpp: in every lane), so that one kernel
+// text serves double, Dual and four-lane vectors alike.
+template <class T>
+inline T num(double a) { return T(a); }
+// Square root of the scalar T (lanes.hpp: lane by lane).
+template <class T>
+inline T root(T a) {
+  using std::sqrt;
+  return sqrt(a);
 }
 template <class T>
 inline V3<T> load3(const double* p) { return {T(p[0]), T(p[1]), T(p[2])}; }
