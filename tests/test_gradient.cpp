@@ -464,9 +464,11 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
     for (int64_t p : w.lists.particles.items) touching += w.cloth.z[3 * p + 2] < layer;
     ASSERT_GT(touching, 0);
     ASSERT_LT(touching, int(w.lists.particles.size()));
-    for (int64_t p : w.lists.particles.items)
+    const std::vector<int64_t>& ids = w.lists.particles.items;
+    for (size_t r = 0; r < ids.size(); ++r)  // the residual in list order
       for (int k = 0; k < 3; ++k) {
-        const double fd = (rp[3 * p + k] - rm[3 * p + k]) / (2 * eps) * F0;
+        const int64_t p = ids[r];
+        const double fd = (rp[3 * r + k] - rm[3 * r + k]) / (2 * eps) * F0;
         EXPECT_NEAR(kv[3 * p + k], fd, 1e-5 * scale) << "particle " << p << " axis " << k << (amrc ? " (AMRC)" : "")
                                                      << (friction ? " friction" : "");
       }

@@ -5,9 +5,12 @@
 #include <malloc.h>
 
 #include <cstring>
+#include <map>
+#include <string>
 
 #include "amrc/amrc.hpp"
 #include "solver/memory_table.hpp"
+#include "memory_rows.hpp"
 #include "world.hpp"
 
 namespace drape::test {
@@ -113,6 +116,38 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
   EXPECT_EQ(on_level(2, false), grown) << "no new stage: the capacity stays";
   EXPECT_EQ(on_level(0, true), finest) << "a new stage: sized to its lists";
   EXPECT_EQ(compact_bytes(w), finest_compact);
+}
+
+// On grid sequencing's level 2 (a sixteenth of the particles) each of those
+// arrays holds under a fifth of its finest-mesh bytes: one sized by the
+// grid again fails here, by name.
+TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
+  Scene s;
+  s.cloth.particles = {129, 129};
+  s.cloth.tile = 16;
+  World w(s, test_fabric());
+  Timers tm;
+  w.loop->step(tm);
+  const std::map<std::string, size_t> finest = list_sized_rows(*w.loop);
+  Amrc amrc(w.cloth, 2);
+  amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, 2);
+  std::vector<int> all(w.tiling.count());
+  for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
+  build_active_lists(w.cloth, w.tiling, all, w.lists);
+  w.loop->mesh_changed(true);
+  w.loop->step(tm);
+  int checked = 0;
+  for (const auto& [name, bytes] : list_sized_rows(*w.loop)) {
+    const size_t before = finest.at(name);
+    if (before == 0) continue;
+    ++checked;
+    std::printf("%-60s %9zu -> %7zu bytes\n", name.c_str(), before, bytes);
+    EXPECT_LT(bytes, before / 5) << name << ": sized by the grid, not the lists?";
+  }
+  for (const char* must : {"Evaluator: residual", "Evaluator: particles' Newton costs",
+                           "TimeLoop: saved unknowns (a step's retry)"})
+    EXPECT_GT(finest.at(must), 0u) << must << ": not checked";
+  EXPECT_GE(checked, 10);
 }
 
 // Keeping the products again (keep_products sizes its arrays to the lists,

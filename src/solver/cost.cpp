@@ -6,6 +6,7 @@
 #include <initializer_list>
 #include <stdexcept>
 
+#include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/shear_cell.hpp"
 
@@ -25,34 +26,12 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
                      const Tiling& tiling, const LoopPolicy& policy, const Reducer& reducer,
                      const Halo& halo)
     : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer), halo_(halo) {
-  const int64_t n = cloth.grid.n();
-  if (n > kMaxParticles) throw std::length_error("Evaluator: more particles than GatherRow's offsets reach");
-  cost_p_.assign(n, 0.0);
-  rho_.assign(3 * n, 0.0);
+  if (cloth.grid.n() > kMaxParticles) throw std::length_error("Evaluator: more particles than GatherRow's offsets reach");
   keep_ = true;  // keep_products(true), sized below
-  at_e_.assign(2 * n, -1);
-  at_t_.assign(2 * n, -1);
-  at_s_.assign(n, -1);
   fit_arrays(true);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
 }
 
-namespace {
-// v holds `need` entries, `fill` where new: capacity grows where need
-// exceeds it, with an eighth to spare (but never past `most`, the grid's
-// count: an AMRC mesh refines some leaves at a time) or, with `exact`, is
-// need (shrinks too). A new capacity takes a new array: the contents are
-// rewritten before they are read, none is copied.
-template <class T>
-void fit(std::vector<T>& v, size_t need, size_t most, bool exact, const T& fill) {
-  if (exact ? v.capacity() != need : v.capacity() < need) {
-    std::vector<T> fresh;
-    fresh.reserve(exact ? need : std::max(need, std::min(most, need + need / 8)));
-    v.swap(fresh);
-  }
-  v.resize(need, fill);  // within the capacity: no allocation
-}
-}  // namespace
 
 // Sizes per element: the owned elements and the ring's; per row: the free
 // particles and the hanging ones.
@@ -61,7 +40,7 @@ void Evaluator::fit_arrays(bool exact) {
   const size_t ne = size_t(lists_.edges.size() + lists_.ring_edges.size());
   const size_t nt = size_t(lists_.triples.size() + lists_.ring_triples.size());
   const size_t ns = size_t(lists_.shears.size() + lists_.ring_shears.size());
-  const size_t nr = size_t(lists_.particles.size()) + lists_.hanging.size();
+  const size_t np = size_t(lists_.particles.size()), nr = np + lists_.hanging.size();
   // An array of `per` entries an element, of `count` elements, at most `most`.
   auto each = [exact](auto& v, size_t count, size_t per, size_t most, auto fill) {
     fit(v, per * count, per * most, exact, fill);
@@ -85,6 +64,8 @@ void Evaluator::fit_arrays(bool exact) {
     each(kc_, nr, kKc, n, 0.0);
   }
   each(rows_, nr, 1, n, GatherRow{});
+  each(rho_, np, 3, n, 0.0);
+  each(cost_p_, np, 1, n, 0.0);
   each(nb_e_, ne, 1, me, int32_t(-1));
   each(nb_t_, nt, 2, mt, int32_t(-1));
   each(nb_s_, ns, 3, ms, int32_t(-1));
@@ -112,14 +93,14 @@ void Evaluator::memory(MemoryTable& t) const {
   };
   t.add(o, "element buffers (edges, triples, cells)", sum({&buf_e_, &buf_t_, &buf_s_}));
   t.add(o, "products' kept numbers (elements, contact)", sum({&kg_e_, &kg_t_, &kg_s_, &kc_}));
+  t.add(o, "particles' Newton costs", cost_p_);
   t.add(o, "band costs, slopes, force derivatives",
-        sum({&cost_p_, &cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
+        sum({&cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
   t.add(o, "residual", rho_);
+  t.add(o, "residual at z's positions (gradients only)", rho_grid_);
   t.add(o, "K's frozen slopes and tensions", sum({&k_slope_e_, &k_slope_t_, &k_slope_s_, &k_tension_}));
   t.add(o, "gather rows", rows_);
-  t.add(o, "slot positions, neighbours in list order",
-        (at_e_.capacity() + at_t_.capacity() + at_s_.capacity() + nb_e_.capacity() + nb_t_.capacity() +
-         nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "neighbours in list order", (nb_e_.capacity() + nb_t_.capacity() + nb_s_.capacity()) * sizeof(int32_t));
   t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
   t.add(o, "assembly maps",
         (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
@@ -131,14 +112,38 @@ void Evaluator::memory(MemoryTable& t) const {
 
 // ---- the element buffers in list order -----------------------------------
 
+// The lists hold their slots in ascending order within each owned tile
+// (lists_.tiles ascending) and along the ring: binary searches find a slot,
+// where a map by slot would be sized by the grid on every rank.
+int64_t Evaluator::position_of(int kind, int64_t s) const {
+  const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
+  const ActiveList* ring[3] = {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears};
+  const ActiveList& o = *own[kind];
+  auto find = [s](const int64_t* b, const int64_t* e) {
+    const int64_t* f = std::lower_bound(b, e, s);
+    return f != e && *f == s ? f : nullptr;
+  };
+  const std::vector<int>& tiles = lists_.tiles;
+  const int t = tiling_.tile_of(kind == 2 ? s : s >> 1);
+  const auto k = std::lower_bound(tiles.begin(), tiles.end(), t);
+  if (k != tiles.end() && *k == t) {  // this rank's tile: its list, or none
+    const size_t kt = size_t(k - tiles.begin());
+    const int64_t* f = find(o.items.data() + o.tile_begin[kt], o.items.data() + o.tile_begin[kt + 1]);
+    return f ? f - o.items.data() : -1;
+  }
+  const ActiveList& r = *ring[kind];
+  const int64_t* f = find(r.items.data(), r.items.data() + r.size());
+  return f ? o.size() + (f - r.items.data()) : -1;
+}
+
 bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
   std::fill(row.at, row.at + 16, -1);
-  const int32_t* pos[3] = {at_e_.data(), at_t_.data(), at_s_.data()};
   static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
   bool listed = true;
   for_gathered(p, [&](int place, int kind, int64_t s, int part) {
-    if (pos[kind][s] >= 0)
-      row.at[place] = width[kind] * pos[kind][s] + 3 * part;
+    const int64_t pos = position_of(kind, s);
+    if (pos >= 0)
+      row.at[place] = int32_t(width[kind] * pos + 3 * part);
     else
       listed = false;
   });
@@ -157,23 +162,23 @@ void Evaluator::list_rows() {
   if (lists_.hanging.capacity() > 0 && hres_.empty())
     for (auto* v : {&hres_, &hpend_}) v->assign(3 * size_t(c_.grid.n()), 0.0);
   kg_ready_ = settled_ = false;  // kept in the old lists' order
-  // Each element's position (the ring's after the owned) and neighbours.
-  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at, auto&& ends) {
-    std::fill(at.begin(), at.end(), -1);
-    auto put = [&](int64_t s, int64_t pos) {
-      at[s] = int32_t(pos);
-      ends(s, pos);
-    };
-    for (int64_t k = 0; k < own.size(); ++k) put(own.items[k], k);
-    for (int64_t k = 0; k < ring.size(); ++k) put(ring.items[k], own.size() + k);
+  if (!std::is_sorted(lists_.tiles.begin(), lists_.tiles.end()))
+    throw std::logic_error("Evaluator: the lists' tiles are not in ascending order");
+  for (const ActiveList* r : {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears})
+    if (!std::is_sorted(r->items.begin(), r->items.end()))
+      throw std::logic_error("Evaluator: the ring's slots are not in ascending order");
+  // Each element's neighbours, at its position (the ring's after the owned).
+  auto place = [](const ActiveList& own, const ActiveList& ring, auto&& ends) {
+    for (int64_t k = 0; k < own.size(); ++k) ends(own.items[k], k);
+    for (int64_t k = 0; k < ring.size(); ++k) ends(ring.items[k], own.size() + k);
   };
-  place(lists_.edges, lists_.ring_edges, at_e_,
+  place(lists_.edges, lists_.ring_edges,
         [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
-  place(lists_.triples, lists_.ring_triples, at_t_, [&](int64_t s, int64_t pos) {
+  place(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
     nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
     nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
   });
-  place(lists_.shears, lists_.ring_shears, at_s_, [&](int64_t s, int64_t pos) {
+  place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
   });
   const ActiveList& pl = lists_.particles;
@@ -256,12 +261,10 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
-void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z) {
-  double* rho = &rho_[3 * p];
+double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho) {
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
-    cost_p_[p] = 0;
-    return;
+    return 0;
   }
   const double* x = z + 3 * p;
   const double* x1 = &c_.x1[3 * p];
@@ -285,7 +288,7 @@ void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double*
     for (int k = 0; k < 3; ++k) r[k] += hres_[3 * p + k];
   const double inv = 1.0 / m_.force_scale;
   for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
-  cost_p_[p] = 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
+  return 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
 }
 
 // ---- pass 3: element gradient contributions ------------------------------
@@ -306,7 +309,7 @@ void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* g
   const V xa = at(z, p), xb = at(z, q);
   const double L = edge_length(xa, xb, g);
   const double w = c_.edge_width[s], f = z[c_.layout.tension() + s];
-  const V ra = residual_of(c_, rho_, p), rb = residual_of(c_, rho_, q);
+  const V ra = residual_of(c_, rho_grid_, p), rb = residual_of(c_, rho_grid_, q);
   // Hessian of the length times (rb - ra): (v - u (u.v)) / L.
   const V v = rb - ra;
   const V hv = (1.0 / L) * (v - dot(g[1], v) * g[1]);
@@ -320,7 +323,7 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V r[3];
-  for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_, ids[k]);
+  for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[3], hr[3];
   bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), r, g, hr);
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
@@ -338,7 +341,7 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   cell_ids(s, pos, ids);
   const CellAt a = cell_at(ids, z);
   V r[4];
-  for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_, ids[k]);
+  for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[4], hr[4];
   shear_cell_hv(a.x, r, g, hr);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
@@ -354,13 +357,13 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
 // ---- pass 4: gather per free particle ------------------------------------
 
 void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad) {
-  const double* rho = &rho_[3 * p];
+  const double* rho = &rho_grid_[3 * p];
   double g[3] = {0, 0, 0};
   if (m_.use_newton) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
-    if (m_.self_contact) self_.add_jtr(p, z, rho_.data(), jtr);
+    if (m_.self_contact) self_.add_jtr(p, z, rho_grid_.data(), jtr);
     const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
@@ -377,7 +380,7 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
 CostTerms Evaluator::reduce_costs() {
   const size_t nt = lists_.tiles.size();
   double* out = partials_.data();
-  tile_sums(lists_.particles, [&](int64_t p) { return cost_p_[p]; }, out);
+  tile_sums(lists_.particles, [&](int64_t, int64_t k) { return cost_p_[k]; }, out);
   // Element costs sit in list order: an owned element's position is its
   // place in its list.
   tile_sums(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
@@ -389,12 +392,17 @@ CostTerms Evaluator::reduce_costs() {
 }
 
 // The cost pass: element forces and band costs, then each particle's
-// residual. settle: see settled_cost.
-CostTerms Evaluator::cost_pass(double* z, double* settle) {
+// residual (with `grid`, at z's indices too, for a gradient). settle: see
+// settled_cost.
+CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
   elements_then_particles([&](int64_t s, int64_t pos) { edge_forces(s, pos, z, settle); },
                           [&](int64_t s, int64_t pos) { triple_forces(s, pos, z, settle); },
                           [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
-                          [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
+                          [&](int64_t p, int64_t pos) {
+                            double* rho = &rho_[3 * pos];
+                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+                            if (grid) std::copy(rho, rho + 3, &rho_grid_[3 * p]);
+                          });
   clear_hanging(hres_);
   return reduce_costs();
 }
@@ -406,7 +414,7 @@ CostTerms Evaluator::settled_cost(double* z) {
   halo_.exchange(z, Halo::kPositions);
   interpolate_hanging(z);
   refresh_pairs(z);
-  const CostTerms cost = cost_pass(z, z);
+  const CostTerms cost = cost_pass(z, z, false);
   settled_ = keep_;  // the elements' kept numbers are z's now (the particles' are not)
   kg_ready_ = false;
   return cost;
@@ -420,6 +428,7 @@ void Evaluator::size_slopes() {
   if (slopes_) return;
   slopes_ = true;
   fit_slopes(true);
+  rho_grid_.assign(3 * size_t(c_.grid.n()), 0.0);
 }
 
 void Evaluator::fit_slopes(bool exact) {
@@ -439,9 +448,9 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   interpolate_hanging(z);
   if (grad) size_slopes();
   refresh_pairs(z);
-  const CostTerms cost = cost_pass(z, nullptr);
+  const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
   if (!grad) return cost;
-  halo_.exchange_particles(rho_.data(), 3);
+  halo_.exchange_particles(rho_grid_.data(), 3);
   hanging_residuals();
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
@@ -454,8 +463,8 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   // A hanging particle's gradient: its contact term and its elements'.
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
-    contact_force(m_.contact, z + 3 * h, fc, &rho_[3 * h], jtr);
-    friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_[3 * h], jtr);
+    contact_force(m_.contact, z + 3 * h, fc, &rho_grid_[3 * h], jtr);
+    friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_grid_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
     gather_listed(row, [&](const double* c) {
       v[0] += c[0];
@@ -507,8 +516,8 @@ void Evaluator::hanging_forces(const double* z) {
 void Evaluator::hanging_residuals() {
   const std::vector<HangingLink>& hl = lists_.hanging;
   for (auto g = hl.rbegin(); g != hl.rend(); ++g) {
-    const V ra = residual_of(c_, rho_, g->a), rb = residual_of(c_, rho_, g->b);
-    store3((1 - g->t) * ra + g->t * rb, &rho_[3 * g->h]);
+    const V ra = residual_of(c_, rho_grid_, g->a), rb = residual_of(c_, rho_grid_, g->b);
+    store3((1 - g->t) * ra + g->t * rb, &rho_grid_[3 * g->h]);
   }
 }
 
@@ -622,24 +631,22 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 3); j <= std::min(gr.nj - 1, jc + 3); ++j) {
       const int64_t p = gr.id(i, j);
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, at_e_[2 * p + d], z);
-        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, at_t_[2 * p + d], z);
+        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, position_of(0, 2 * p + d), z);
+        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, position_of(1, 2 * p + d), z);
       }
-      if (c_.shear_on[p]) shear_forces(p, at_s_[p], z);
+      if (c_.shear_on[p]) shear_forces(p, position_of(2, p), z);
     }
   double sum = 0;
   for (int i = std::max(0, ic - 2); i <= std::min(gr.ni - 1, ic + 2); ++i)
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
-      if (c_.free(p)) {
-        particle_residual(p, row_of(p), z);
-        sum += cost_p_[p];
-      }
+      double rho[3];  // scratch: the window's own
+      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho);
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) sum += cost_e_[at_e_[2 * p + d]];
-        if (c_.triple_on[2 * p + d]) sum += cost_t_[at_t_[2 * p + d]];
+        if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
+        if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];
       }
-      if (c_.shear_on[p]) sum += cost_s_[at_s_[p]];
+      if (c_.shear_on[p]) sum += cost_s_[position_of(2, p)];
     }
   return sum;
 }
@@ -653,8 +660,8 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   // window_cost reaches elements by slot: each active one needs a list
   // position, which holds where one rank owns every tile (this mode's case).
   for (int64_t s = 0; s < 2 * gr.n(); ++s)
-    if ((c_.edge_on[s] && at_e_[s] < 0) || (c_.triple_on[s] && at_t_[s] < 0) ||
-        (s < gr.n() && c_.shear_on[s] && at_s_[s] < 0))
+    if ((c_.edge_on[s] && position_of(0, s) < 0) || (c_.triple_on[s] && position_of(1, s) < 0) ||
+        (s < gr.n() && c_.shear_on[s] && position_of(2, s) < 0))
       throw std::logic_error("numeric gradient: an active element in no list (it needs every tile on one rank)");
   const double hmin = std::min(gr.hi, gr.hj), F0 = m_.force_scale;
   auto diff = [&](int64_t u, int64_t p, double scale) {

@@ -108,8 +108,15 @@ class Evaluator {
   // rank does not own are left out (one rank sees the whole operator).
   void assemble_stiffness(BlockMatrix& K);
 
-  // Newton residual (scaled, 3 per particle) of the last evaluate().
+  // Newton residual (scaled) of the last evaluation, 3 per free particle in
+  // the particle list's order (lists().particles.items[r] at 3 r): the
+  // compact vectors' order (Newton reads it as its right-hand side).
   const std::vector<double>& residual() const { return rho_; }
+  // The same at z's position indices, with the ghosts' (from their owners)
+  // and the hanging particles' (their ends', interpolated): what the
+  // gradient's element passes read. Held only once a gradient was asked for
+  // (empty in Newton's runs); the last evaluate() with a gradient's.
+  const std::vector<double>& gradient_residual() const { return rho_grid_; }
 
   const ActiveLists& lists() const { return lists_; }
   // The arrays indexed by list position (element buffers, kept numbers,
@@ -141,7 +148,7 @@ class Evaluator {
   void edge_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
-  CostTerms cost_pass(double* z, double* settle);
+  CostTerms cost_pass(double* z, double* settle, bool grid);
   void size_slopes();
   // Sizes the arrays kept in list order (and the rows) for the lists now:
   // grown where a list outgrew them (with an eighth to spare), else kept;
@@ -155,7 +162,8 @@ class Evaluator {
   void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
   void triple_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
-  void particle_residual(int64_t p, const GatherRow& row, const double* z);
+  // Particle p's scaled residual into rho (3); returns its Newton cost.
+  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void triple_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
@@ -207,7 +215,7 @@ class Evaluator {
   }
   // Hanging particle i's (of lists_.hanging): kept after the particle list's.
   const GatherRow& hanging_row(size_t i) const { return rows_[lists_.particles.size() + i]; }
-  // Refreshes rows_ and the slot maps when the lists have changed.
+  // Refreshes rows_ and the neighbours when the lists have changed.
   void list_rows();
   CostTerms reduce_costs();
   // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
@@ -230,13 +238,14 @@ class Evaluator {
   const Halo& halo_;
   static_assert(kShearSlot == 12 && kEdgeSlot == 6 && kTripleSlot == 9, "buffer slots: 2, 3, 4 particles x 3");
   std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (6, 9, 12), list order
-  std::vector<double> cost_p_;                    // per particle (grid index)
+  std::vector<double> cost_p_;                    // Newton cost per free particle, list order
   // Per element, in list order like buf_*: a coarse mesh's elements lie far
   // apart in grid order, one cache line each per array.
   std::vector<double> cost_e_, cost_t_, cost_s_;  // band cost
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
-  std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
+  std::vector<double> rho_;                       // scaled Newton residual, 3 per free particle, list order
+  std::vector<double> rho_grid_;                  // the same at z's indices, ghosts too (gradients only)
   std::vector<double> k_slope_e_, k_slope_t_, k_slope_s_;  // K's frozen band slopes, list order
   std::vector<double> k_tension_;                 // and edge tensions
   // stiffness_product's z-only numbers (keep_products), the elements' by
@@ -283,13 +292,13 @@ class Evaluator {
   // element pass streams through them and a particle finds its elements'
   // entries on nearby lines. rows_: each owned particle's entries (by its
   // position in the particle list), then each hanging particle's
-  // (hanging_row); at_e_, at_t_, at_s_: slot -> position, -1 where the slot
-  // is in no list (by slot: the grid's size). For rows_stamp_'s lists and
-  // rows_hanging_ hanging particles. All but the slot maps are sized by the
-  // lists (fit_arrays): on several ranks, or on a coarse mesh, they hold
-  // this rank's elements only.
+  // (hanging_row), for rows_stamp_'s lists and rows_hanging_ hanging
+  // particles. Sized by the lists (fit_arrays): on several ranks, or on a
+  // coarse mesh, they hold this rank's elements only. No map by slot: a
+  // slot's position is searched for in its list (position_of).
   std::vector<GatherRow> rows_;
-  std::vector<int32_t> at_e_, at_t_, at_s_;
+  // Slot s of kind (0 edge, 1 triple, 2 cell): its position, -1 in no list.
+  int64_t position_of(int kind, int64_t s) const;
   // The neighbour tables' entries each element reads, in list order too:
   // an edge's far end, a triple's previous and next particles, a cell's
   // corners 1-3 (the tables' own lines are one per element on a coarse mesh).

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "base/error.hpp"
+#include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/loops.hpp"
 
@@ -16,8 +17,14 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
     : c_(cloth), m_(model), lists_(lists), red_(red), halo_(halo), spec_(spec),
       ev_(cloth, model, lists, tiling, policy, red, halo), cg_(cloth, lists, tiling, red),
       newton_(cloth, cg_, spec.preconditioner) {
-  z_saved_.assign(cloth.z.size(), 0.0);
+  fit_saved(true);
   free_ = red.sum_i64(lists.particles.size());
+}
+
+// Sized by this rank's unknowns (the lists'), as the evaluator's arrays.
+void TimeLoop::fit_saved(bool exact) {
+  const size_t need = size_t(cg_.unknowns_below(c_.layout.size()));
+  fit(z_saved_, need, c_.z.size(), exact, 0.0);
 }
 
 void TimeLoop::memory(MemoryTable& t) const {
@@ -61,16 +68,19 @@ void TimeLoop::freeze_bend_axes() {
   }
 }
 
+// Packed in the compact numbering of all the unknowns (Minimizer's, tile by
+// tile): a rank holds its own only.
 void TimeLoop::save_unknowns() {
+  fit_saved(false);  // the lists changed without mesh_changed (tests): grows here
   const double* z = c_.z.data();
   double* s = z_saved_.data();
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { s[k] = z[k]; });
+  cg_.for_each_unknown(c_.layout.size(), [&](int64_t c, int64_t k) { s[c] = z[k]; });
 }
 
 void TimeLoop::restore_unknowns() {
   double* z = c_.z.data();
   const double* s = z_saved_.data();
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { z[k] = s[k]; });
+  cg_.for_each_unknown(c_.layout.size(), [&](int64_t c, int64_t k) { z[k] = s[c]; });
 }
 
 void TimeLoop::refresh_ghosts(bool history) {
@@ -148,9 +158,10 @@ void TimeLoop::check_finite(const StepStats& st) const {
   if (std::isfinite(st.cost.total())) return;
   const Grid& g = c_.grid;
   const std::vector<double>& rho = ev_.residual();
-  for (int64_t p : lists_.particles.items)
+  const ActiveList& L = lists_.particles;
+  for (int64_t r = 0; r < L.size(); ++r)
     for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(c_.z[3 * p + k]) || !std::isfinite(rho[3 * p + k])) {
+      if (const int64_t p = L.items[r]; !std::isfinite(c_.z[3 * p + k]) || !std::isfinite(rho[3 * r + k])) {
         std::ostringstream os;
         os << "numerical failure at step " << st.step << ", iteration " << st.iterations
            << ": non-finite position or force residual at particle (" << g.i_of(p) << ", "
