@@ -69,6 +69,12 @@ void Evaluator::fit_arrays(bool exact) {
   each(nb_e_, ne, 1, me, int32_t(-1));
   each(nb_t_, nt, 2, mt, int32_t(-1));
   each(nb_s_, ns, 3, ms, int32_t(-1));
+  // Axes and anchors last from one step's start to the next: kept while the
+  // lists stay (a new capacity for the same lists: keep_products).
+  fit_keeping(axis_t_, 3 * nt, 3 * mt, exact, 0.0);
+  fit_keeping(anc_e_, ne, me, exact, 0.0);
+  fit_keeping(anc_t_, nt, mt, exact, 0.0);
+  fit_keeping(anc_s_, ns, ms, exact, 0.0);
 }
 
 void Evaluator::fit_to_lists(bool exact) {
@@ -101,6 +107,8 @@ void Evaluator::memory(MemoryTable& t) const {
   t.add(o, "K's frozen slopes and tensions", sum({&k_slope_e_, &k_slope_t_, &k_slope_s_, &k_tension_}));
   t.add(o, "gather rows", rows_);
   t.add(o, "neighbours in list order", (nb_e_.capacity() + nb_t_.capacity() + nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "bending axes", axis_t_);
+  t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
   t.add(o, "assembly maps",
         (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
@@ -187,6 +195,42 @@ void Evaluator::list_rows() {
   for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i]);
+  // New lists: axes and anchors held in the old lists' order, from the
+  // cloth's history and forces again (the step's start computes both anew,
+  // with the ghosts current).
+  if (derived_stamp_ != lists_.stamp) {
+    freeze_bend_axes(c_.x1.data());
+    hysteresis_anchors(c_.x1.data(), c_.z.data());
+    derived_stamp_ = lists_.stamp;
+  }
+}
+
+// A warp triple bends about the weft tangent, a weft triple about minus the
+// warp tangent: both then count bending towards -normal as positive. The
+// other yarn's tangent, less its part along the line's own: the axis is
+// then normal to the line, so its edges stay clear of it (an edge along the
+// axis leaves the angle undefined: a corner folded onto its diagonal
+// neighbour laid one there). On an unsheared cloth nothing changes.
+void Evaluator::freeze_bend_axes(const double* x1) {
+  list_rows();
+  auto tangent = [&](int64_t p, int d) {
+    const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
+    const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
+    V t = at(x1, b) - at(x1, a);
+    const double len = std::sqrt(dot(t, t));
+    return len > 0 ? (1.0 / len) * t : V{0, 0, 0};
+  };
+  auto axis = [](const V& other, const V& own) {
+    const V a = other - dot(other, own) * own;
+    const double len = std::sqrt(dot(a, a));
+    return len > 1e-3 ? (1.0 / len) * a : other;
+  };
+  // Each triple's own entry: any schedule writes the same numbers.
+  for_triples([&](int64_t s, int64_t pos) {
+    const int64_t p = s >> 1;
+    const V warp = tangent(p, 0), weft = tangent(p, 1);
+    store3((s & 1) == 0 ? axis(weft, warp) : -1.0 * axis(warp, weft), &axis_t_[3 * pos]);
+  });
 }
 
 // ---- pass 1: element forces and band costs -------------------------------
@@ -199,7 +243,7 @@ void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* set
   const double L = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
-  const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
+  const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
   if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
@@ -219,11 +263,11 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* s
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V g[3];
-  const V n = load3<double>(&c_.bend_axis[3 * s]);
+  const V n = load3<double>(&axis_t_[3 * pos]);
   const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const BandValue bv = m_.bend[d].at(th / Lm);
-  const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
+  const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
   if (settle && keep_) kept_gradients(w * st.df_dq / Lm, g, 3, &kg_t_[kKgTriple * pos]);
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
@@ -245,7 +289,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const double phi = shear_cell(a.x, g);
   const double A = c_.shear_area[s];
   const BandValue bv = m_.shear.at(phi);
-  const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
+  const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
   if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
@@ -325,7 +369,7 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   V r[3];
   for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[3], hr[3];
-  bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), r, g, hr);
+  bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), r, g, hr);
   const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
   const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
@@ -537,8 +581,8 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   // A band only stiffens its element where the force lies outside it (the
   // exact Gauss-Newton diagonal); inside, the force is free at no cost.
   const double mu = m_.memory;
-  auto band_slope = [mu, this](int64_t slot, const Band& b, double f, double q) {
-    const double stop = b.stop(c_.anchor[slot], q).df_dq;
+  auto band_slope = [mu](double anchor, const Band& b, double f, double q) {
+    const double stop = b.stop(anchor, q).df_dq;
     const double r = b.excess(f, q).dr_dq;
     return std::sqrt(r * r + mu * stop * stop);
   };
@@ -551,7 +595,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     const double L = edge_length(at(z, p), at(z, q), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
     const double eps = L / L0 - 1;
-    const double geo = f * w / L, band = w * band_slope(s, m_.stretch[d], f, eps) / L0;
+    const double geo = f * w / L, band = w * band_slope(anc_e_[pos], m_.stretch[d], f, eps) / L0;
     for (int k = 0; k < 2; ++k) buf_e_[kEdgeSlot * pos + 3 * k] = (2 * geo * geo + band * band) * inv2;
     const double nf = double(c_.free(p)) + double(c_.free(q));
     diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
@@ -561,11 +605,11 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     int64_t ids[3];
     triple_ids(s, pos, ids);
     V g[3];
-    const V n = load3<double>(&c_.bend_axis[3 * s]);
+    const V n = load3<double>(&axis_t_[3 * pos]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s], f = z[c_.layout.moment() + s];
     const double slope =
-        band_slope(c_.layout.moment() - c_.layout.tension() + s, m_.bend[d], f, th / Lm) * w / (Lm * Lm);
+        band_slope(anc_t_[pos], m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
@@ -584,7 +628,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     V g[4];
     const double phi = shear_cell(a.x, g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
-    const double slope = band_slope(c_.layout.shear() - c_.layout.tension() + s, m_.shear, f, phi) * A / Lr;
+    const double slope = band_slope(anc_s_[pos], m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 4; ++k) {
       const double g2 = dot(g[k], g[k]);

@@ -71,10 +71,29 @@ class Evaluator {
   // is the Newton term alone, a function of the positions.
   void hysteresis_forces(double* z);
   // At a step's start: turns the step-start forces (z's force slots) into
-  // Band::anchor values in `anchor` (laid out as Cloth::anchor, from the
-  // tension block on), with the strains at positions x1 (whose ghost and
+  // Band::anchor values, each listed element's (in list order, as the
+  // element buffers), with the strains at positions x1 (whose ghost and
   // hanging entries must be current) and the ring's forces in z current.
-  void hysteresis_anchors(const double* x1, const double* z, double* anchor);
+  // A list change computes them again from the cloth's x1 and z, so that
+  // they always belong to the present lists.
+  void hysteresis_anchors(const double* x1, const double* z);
+  // Element slot s's anchor (kind 0 edge, 1 triple, 2 cell); NaN where s is
+  // in no list.
+  double anchor(int kind, int64_t s) const {
+    const std::vector<double>* a[3] = {&anc_e_, &anc_t_, &anc_s_};
+    const int64_t pos = position_of(kind, s);
+    return pos >= 0 ? (*a[kind])[size_t(pos)] : std::nan("");
+  }
+  // Each listed triple's bending axis (its own and the ring's) from the
+  // positions x1, frozen until the next call: the time loop's at a step's
+  // start (ghosts current). A list change freezes them again from the
+  // cloth's x1, so that they always belong to the present lists.
+  void freeze_bend_axes(const double* x1);
+  // Triple slot s's axis (3 values), nullptr where s is in no list.
+  const double* bend_axis(int64_t s) const {
+    const int64_t pos = position_of(1, s);
+    return pos >= 0 ? &axis_t_[3 * size_t(pos)] : nullptr;
+  }
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
@@ -303,6 +322,11 @@ class Evaluator {
   // an edge's far end, a triple's previous and next particles, a cell's
   // corners 1-3 (the tables' own lines are one per element on a coarse mesh).
   std::vector<int32_t> nb_e_, nb_t_, nb_s_;
+  // Each triple's bending axis (3 doubles), in list order too.
+  std::vector<double> axis_t_;
+  // Each element's band anchor (hysteresis_anchors), in list order too.
+  std::vector<double> anc_e_, anc_t_, anc_s_;
+  uint64_t derived_stamp_ = 0;  // the lists the axes and anchors were laid out for
   void triple_ids(int64_t s, int64_t pos, int64_t ids[3]) const {
     ids[0] = nb_t_[2 * pos];
     ids[1] = s >> 1;

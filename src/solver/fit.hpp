@@ -22,4 +22,17 @@ void fit(std::vector<T>& v, size_t need, size_t most, bool exact, const T& fill)
   v.resize(need, fill);  // within the capacity: no allocation
 }
 
+// The same, keeping the contents (the first `need` entries) across a new
+// capacity: for what the lists' positions hold from one call to the next.
+template <class T>
+void fit_keeping(std::vector<T>& v, size_t need, size_t most, bool exact, const T& fill) {
+  if (exact ? v.capacity() != need : v.capacity() < need) {
+    std::vector<T> fresh;
+    fresh.reserve(exact ? need : std::max(need, std::min(most, need + need / 8)));
+    fresh.assign(v.begin(), v.begin() + std::min(v.size(), need));
+    v.swap(fresh);
+  }
+  v.resize(need, fill);
+}
+
 }  // namespace drape
