@@ -158,7 +158,21 @@ bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
   return listed;
 }
 
-void Evaluator::list_rows() {
+void Evaluator::list_rows(bool derive) {
+  build_rows();
+  // New lists: the axes and anchors held are in the old lists' order. An
+  // entry point that reads them first computes them from the cloth's history
+  // and forces (the step's start computes both itself, with the ghosts
+  // current, before any other: no work twice).
+  if (derived_stamp_ != lists_.stamp) {
+    axes_stale_ = anchors_stale_ = true;
+    derived_stamp_ = lists_.stamp;
+  }
+  if (derive && axes_stale_) freeze_bend_axes(c_.x1.data());
+  if (derive && anchors_stale_) hysteresis_anchors(c_.x1.data(), c_.z.data());
+}
+
+void Evaluator::build_rows() {
   if (rows_stamp_ == lists_.stamp && lists_.stamp != 0 && rows_hanging_ == lists_.hanging.size()) return;
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
@@ -195,14 +209,6 @@ void Evaluator::list_rows() {
   for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i]);
-  // New lists: axes and anchors held in the old lists' order, from the
-  // cloth's history and forces again (the step's start computes both anew,
-  // with the ghosts current).
-  if (derived_stamp_ != lists_.stamp) {
-    freeze_bend_axes(c_.x1.data());
-    hysteresis_anchors(c_.x1.data(), c_.z.data());
-    derived_stamp_ = lists_.stamp;
-  }
 }
 
 // A warp triple bends about the weft tangent, a weft triple about minus the
@@ -212,7 +218,8 @@ void Evaluator::list_rows() {
 // axis leaves the angle undefined: a corner folded onto its diagonal
 // neighbour laid one there). On an unsheared cloth nothing changes.
 void Evaluator::freeze_bend_axes(const double* x1) {
-  list_rows();
+  list_rows(false);
+  axes_stale_ = false;
   auto tangent = [&](int64_t p, int d) {
     const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
     const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;

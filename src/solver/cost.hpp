@@ -74,8 +74,9 @@ class Evaluator {
   // Band::anchor values, each listed element's (in list order, as the
   // element buffers), with the strains at positions x1 (whose ghost and
   // hanging entries must be current) and the ring's forces in z current.
-  // A list change computes them again from the cloth's x1 and z, so that
-  // they always belong to the present lists.
+  // After a list change, an entry point that reads them before this is
+  // called computes them from the cloth's x1 and z: they always belong to
+  // the present lists.
   void hysteresis_anchors(const double* x1, const double* z);
   // Element slot s's anchor (kind 0 edge, 1 triple, 2 cell); NaN where s is
   // in no list.
@@ -86,8 +87,8 @@ class Evaluator {
   }
   // Each listed triple's bending axis (its own and the ring's) from the
   // positions x1, frozen until the next call: the time loop's at a step's
-  // start (ghosts current). A list change freezes them again from the
-  // cloth's x1, so that they always belong to the present lists.
+  // start (ghosts current). After a list change, an entry point that reads
+  // them before this is called freezes them from the cloth's x1.
   void freeze_bend_axes(const double* x1);
   // Triple slot s's axis (3 values), nullptr where s is in no list.
   const double* bend_axis(int64_t s) const {
@@ -234,8 +235,11 @@ class Evaluator {
   }
   // Hanging particle i's (of lists_.hanging): kept after the particle list's.
   const GatherRow& hanging_row(size_t i) const { return rows_[lists_.particles.size() + i]; }
-  // Refreshes rows_ and the neighbours when the lists have changed.
-  void list_rows();
+  // Refreshes rows_ and the neighbours when the lists have changed (and,
+  // with `derive`, the axes and anchors where a list change left them stale).
+  void list_rows(bool derive = true);
+  void build_rows();
+  bool axes_stale_ = false, anchors_stale_ = false;
   CostTerms reduce_costs();
   // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
   // order: the element forces on them into their ends' residuals; residuals

@@ -75,7 +75,9 @@ void Evaluator::hysteresis_forces(double* z) {
 void Evaluator::hysteresis_anchors(const double* x1, const double* z) {
   // Each element's step-start force f1 (z's force slots) folded into its
   // anchor; only the active elements and the ring's, the ones that read it.
-  list_rows();
+  list_rows(false);
+  if (axes_stale_) freeze_bend_axes(c_.x1.data());  // the strains read the axes
+  anchors_stale_ = false;
   settled_ = false;  // new anchors: the kept stops are not theirs
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
