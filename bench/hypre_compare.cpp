@@ -330,7 +330,7 @@ int run(int argc, char** argv) {
   std::vector<double> b(3 * ids.size());
   const std::vector<double>& rho = ev.residual();
   for (size_t r = 0; r < ids.size(); ++r)
-    for (int k = 0; k < 3; ++k) b[3 * r + k] = -rho[3 * ids[r] + k];
+    for (int k = 0; k < 3; ++k) b[3 * r + k] = -rho[3 * r + k];  // the residual in list order
   std::vector<double> pos(3 * ids.size());
   double centroid[3] = {};
   for (size_t r = 0; r < ids.size(); ++r)

@@ -74,7 +74,7 @@ Simulation random_world(unsigned seed, bool amrc = false) {
   EXPECT_GT(w.model.bend[0].reversal(), 1.0);
   EXPECT_GT(w.model.stretch[1].reversal(), 1.0);
   EXPECT_GT(w.model.shear.reversal(), 1.0);
-  w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), f1.data(), w.cloth.anchor.data());
+  w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), f1.data());
   return w;
 }
 
@@ -561,9 +561,11 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
     for (int64_t p : w.lists.particles.items) touching += w.cloth.z[3 * p + 2] < layer;
     ASSERT_GT(touching, 0);
     ASSERT_LT(touching, int(w.lists.particles.size()));
-    for (int64_t p : w.lists.particles.items)
+    const std::vector<int64_t>& ids = w.lists.particles.items;
+    for (size_t r = 0; r < ids.size(); ++r)  // the residual in list order
       for (int k = 0; k < 3; ++k) {
-        const double fd = (rp[3 * p + k] - rm[3 * p + k]) / (2 * eps) * F0;
+        const int64_t p = ids[r];
+        const double fd = (rp[3 * r + k] - rm[3 * r + k]) / (2 * eps) * F0;
         EXPECT_NEAR(kv[3 * p + k], fd, 1e-5 * scale) << "particle " << p << " axis " << k << (amrc ? " (AMRC)" : "")
                                                      << (friction ? " friction" : "");
       }
@@ -676,11 +678,10 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
     // Whatever else reaches the evaluator between settled_cost and the
     // diagonal ends the shortcut: the diagonal then computes everything.
     Evaluator& ev = one.loop->evaluator();
-    std::vector<double> anchors(one.cloth.anchor.size(), 0.0);
     const std::function<void()> others[] = {
         [&] { ev.evaluate(one.cloth.z.data(), nullptr); },
         [&] { ev.hysteresis_forces(one.cloth.z.data()); },
-        [&] { ev.hysteresis_anchors(one.cloth.x1.data(), one.cloth.z.data(), anchors.data()); },
+        [&] { ev.hysteresis_anchors(one.cloth.x1.data(), one.cloth.z.data()); },
         [&] { ev.keep_products(true); }};
     for (const auto& other : others) {
       ev.settled_cost(one.cloth.z.data());
@@ -737,8 +738,11 @@ TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
   const std::pair<const char*, Call> entries[] = {
       {"hysteresis_anchors",
        [&](Evaluator& e) {
-         std::vector<double> a(w.cloth.anchor.size(), 0.0);
-         e.hysteresis_anchors(w.cloth.x1.data(), w.cloth.z.data(), a.data());
+         e.hysteresis_anchors(w.cloth.x1.data(), w.cloth.z.data());
+         std::vector<double> a;  // by slot, the lists' order
+         const ActiveList* lists[3] = {&w.lists.edges, &w.lists.triples, &w.lists.shears};
+         for (int kind = 0; kind < 3; ++kind)
+           for (int64_t s : lists[kind]->items) a.push_back(e.anchor(kind, s));
          return a;
        }},
       {"hysteresis_forces",

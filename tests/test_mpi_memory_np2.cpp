@@ -7,6 +7,7 @@
 
 #include "decomp/decomposition.hpp"
 #include "solver/memory_table.hpp"
+#include "support/memory_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace drape::test {
@@ -19,8 +20,8 @@ size_t evaluator_bytes(TimeLoop& loop) {
 }
 
 // Half the tiles and a ring of one particle: well under two thirds of one
-// rank's table (about 0.55 at 129 x 129; the grid-sized residual and slot
-// maps are the rest). Arrays sized by the grid would give 1.
+// rank's table (the ring's elements are the rest). Arrays sized by the
+// grid would give 1.
 TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
   Scene s;
   s.cloth.particles = {129, 129};
@@ -43,6 +44,18 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
   const size_t mine = evaluator_bytes(loop);
   std::printf("evaluator: %zu bytes on one rank, %zu on this one of two\n", whole, mine);
   EXPECT_LT(double(mine), 0.65 * double(whole));
+  // Each of the time loop's arrays but the ones named as the grid's
+  // (memory_rows.hpp): the residual, particle costs, saved unknowns and
+  // Newton's compact vectors too.
+  const std::map<std::string, size_t> whole_rows = list_sized_rows(*one.loop);
+  int checked = 0;
+  for (const auto& [name, bytes] : list_sized_rows(loop)) {
+    const size_t all = whole_rows.at(name);
+    if (all == 0) continue;
+    ++checked;
+    EXPECT_LT(double(bytes), 0.65 * double(all)) << name << ": sized by the grid, not this rank's lists?";
+  }
+  EXPECT_GE(checked, 10);
 }
 
 }  // namespace

@@ -65,7 +65,6 @@ struct Cloth {
   Layout layout;
   std::vector<double> z;         // unknowns (see Layout)
   std::vector<double> x1, x2;    // positions at the start of this step and the one before
-  std::vector<double> anchor;    // per element force slot: Band::anchor of the step's start (z from tension() on)
   std::vector<double> mass;      // kg per particle: density * area it represents
   std::vector<uint8_t> flags;    // ParticleFlag per particle
   std::vector<uint8_t> level;    // AMRC level of the particle's finest leaf (0: finest)
@@ -78,8 +77,6 @@ struct Cloth {
   // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k][p]
   // is the slot whose corner k+1 p is (at most one: the leaves tile the cloth).
   std::vector<int32_t> cell[3], corner_of[3];
-  // Per triple: the bending reference axis (unit, 3 per slot), frozen for a step.
-  std::vector<double> bend_axis;
   // Rest geometry per slot, from the active mesh: rest length and the width
   // (edges, triples) or area (shear cells) the element stands for.
   std::vector<double> edge_rest, edge_width, triple_rest, triple_width, shear_area, shear_rest;

@@ -6,6 +6,7 @@
 #include <initializer_list>
 #include <stdexcept>
 
+#include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/shear_cell.hpp"
 
@@ -25,34 +26,12 @@ Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& 
                      const Tiling& tiling, const LoopPolicy& policy, const Reducer& reducer,
                      const Halo& halo)
     : c_(cloth), m_(model), lists_(lists), tiling_(tiling), pol_(policy), red_(reducer), halo_(halo) {
-  const int64_t n = cloth.grid.n();
-  if (n > kMaxParticles) throw std::length_error("Evaluator: more particles than GatherRow's offsets reach");
-  cost_p_.assign(n, 0.0);
-  rho_.assign(3 * n, 0.0);
+  if (cloth.grid.n() > kMaxParticles) throw std::length_error("Evaluator: more particles than GatherRow's offsets reach");
   keep_ = true;  // keep_products(true), sized below
-  at_e_.assign(2 * n, -1);
-  at_t_.assign(2 * n, -1);
-  at_s_.assign(n, -1);
   fit_arrays(true);
   partials_.assign(4 * size_t(tiling.count()), 0.0);
 }
 
-namespace {
-// v holds `need` entries, `fill` where new: capacity grows where need
-// exceeds it, with an eighth to spare (but never past `most`, the grid's
-// count: an AMRC mesh refines some leaves at a time) or, with `exact`, is
-// need (shrinks too). A new capacity takes a new array: the contents are
-// rewritten before they are read, none is copied.
-template <class T>
-void fit(std::vector<T>& v, size_t need, size_t most, bool exact, const T& fill) {
-  if (exact ? v.capacity() != need : v.capacity() < need) {
-    std::vector<T> fresh;
-    fresh.reserve(exact ? need : std::max(need, std::min(most, need + need / 8)));
-    v.swap(fresh);
-  }
-  v.resize(need, fill);  // within the capacity: no allocation
-}
-}  // namespace
 
 // Sizes per element: the owned elements and the ring's; per row: the free
 // particles and the hanging ones.
@@ -61,7 +40,7 @@ void Evaluator::fit_arrays(bool exact) {
   const size_t ne = size_t(lists_.edges.size() + lists_.ring_edges.size());
   const size_t nt = size_t(lists_.triples.size() + lists_.ring_triples.size());
   const size_t ns = size_t(lists_.shears.size() + lists_.ring_shears.size());
-  const size_t nr = size_t(lists_.particles.size()) + lists_.hanging.size();
+  const size_t np = size_t(lists_.particles.size()), nr = np + lists_.hanging.size();
   // An array of `per` entries an element, of `count` elements, at most `most`.
   auto each = [exact](auto& v, size_t count, size_t per, size_t most, auto fill) {
     fit(v, per * count, per * most, exact, fill);
@@ -85,9 +64,17 @@ void Evaluator::fit_arrays(bool exact) {
     each(kc_, nr, kKc, n, 0.0);
   }
   each(rows_, nr, 1, n, GatherRow{});
+  each(rho_, np, 3, n, 0.0);
+  each(cost_p_, np, 1, n, 0.0);
   each(nb_e_, ne, 1, me, int32_t(-1));
   each(nb_t_, nt, 2, mt, int32_t(-1));
   each(nb_s_, ns, 3, ms, int32_t(-1));
+  // Axes and anchors last from one step's start to the next: kept while the
+  // lists stay (a new capacity for the same lists: keep_products).
+  fit_keeping(axis_t_, 3 * nt, 3 * mt, exact, 0.0);
+  fit_keeping(anc_e_, ne, me, exact, 0.0);
+  fit_keeping(anc_t_, nt, mt, exact, 0.0);
+  fit_keeping(anc_s_, ns, ms, exact, 0.0);
 }
 
 void Evaluator::fit_to_lists(bool exact) {
@@ -112,14 +99,16 @@ void Evaluator::memory(MemoryTable& t) const {
   };
   t.add(o, "element buffers (edges, triples, cells)", sum({&buf_e_, &buf_t_, &buf_s_}));
   t.add(o, "products' kept numbers (elements, contact)", sum({&kg_e_, &kg_t_, &kg_s_, &kc_}));
+  t.add(o, "particles' Newton costs", cost_p_);
   t.add(o, "band costs, slopes, force derivatives",
-        sum({&cost_p_, &cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
+        sum({&cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
   t.add(o, "residual", rho_);
+  t.add(o, "residual at z's positions (gradients only)", rho_grid_);
   t.add(o, "K's frozen slopes and tensions", sum({&k_slope_e_, &k_slope_t_, &k_slope_s_, &k_tension_}));
   t.add(o, "gather rows", rows_);
-  t.add(o, "slot positions, neighbours in list order",
-        (at_e_.capacity() + at_t_.capacity() + at_s_.capacity() + nb_e_.capacity() + nb_t_.capacity() +
-         nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "neighbours in list order", (nb_e_.capacity() + nb_t_.capacity() + nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "bending axes", axis_t_);
+  t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
   t.add(o, "assembly maps",
         (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
@@ -131,21 +120,59 @@ void Evaluator::memory(MemoryTable& t) const {
 
 // ---- the element buffers in list order -----------------------------------
 
+// The lists hold their slots in ascending order within each owned tile
+// (lists_.tiles ascending) and along the ring: binary searches find a slot,
+// where a map by slot would be sized by the grid on every rank.
+int64_t Evaluator::position_of(int kind, int64_t s) const {
+  const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
+  const ActiveList* ring[3] = {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears};
+  const ActiveList& o = *own[kind];
+  auto find = [s](const int64_t* b, const int64_t* e) {
+    const int64_t* f = std::lower_bound(b, e, s);
+    return f != e && *f == s ? f : nullptr;
+  };
+  const std::vector<int>& tiles = lists_.tiles;
+  const int t = tiling_.tile_of(kind == 2 ? s : s >> 1);
+  const auto k = std::lower_bound(tiles.begin(), tiles.end(), t);
+  if (k != tiles.end() && *k == t) {  // this rank's tile: its list, or none
+    const size_t kt = size_t(k - tiles.begin());
+    const int64_t* f = find(o.items.data() + o.tile_begin[kt], o.items.data() + o.tile_begin[kt + 1]);
+    return f ? f - o.items.data() : -1;
+  }
+  const ActiveList& r = *ring[kind];
+  const int64_t* f = find(r.items.data(), r.items.data() + r.size());
+  return f ? o.size() + (f - r.items.data()) : -1;
+}
+
 bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
   std::fill(row.at, row.at + 16, -1);
-  const int32_t* pos[3] = {at_e_.data(), at_t_.data(), at_s_.data()};
   static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
   bool listed = true;
   for_gathered(p, [&](int place, int kind, int64_t s, int part) {
-    if (pos[kind][s] >= 0)
-      row.at[place] = width[kind] * pos[kind][s] + 3 * part;
+    const int64_t pos = position_of(kind, s);
+    if (pos >= 0)
+      row.at[place] = int32_t(width[kind] * pos + 3 * part);
     else
       listed = false;
   });
   return listed;
 }
 
-void Evaluator::list_rows() {
+void Evaluator::list_rows(bool derive) {
+  build_rows();
+  // New lists: the axes and anchors held are in the old lists' order. An
+  // entry point that reads them first computes them from the cloth's history
+  // and forces (the step's start computes both itself, with the ghosts
+  // current, before any other: no work twice).
+  if (derived_stamp_ != lists_.stamp) {
+    axes_stale_ = anchors_stale_ = true;
+    derived_stamp_ = lists_.stamp;
+  }
+  if (derive && axes_stale_) freeze_bend_axes(c_.x1.data());
+  if (derive && anchors_stale_) hysteresis_anchors(c_.x1.data(), c_.z.data());
+}
+
+void Evaluator::build_rows() {
   if (rows_stamp_ == lists_.stamp && lists_.stamp != 0 && rows_hanging_ == lists_.hanging.size()) return;
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
@@ -157,23 +184,23 @@ void Evaluator::list_rows() {
   if (lists_.hanging.capacity() > 0 && hres_.empty())
     for (auto* v : {&hres_, &hpend_}) v->assign(3 * size_t(c_.grid.n()), 0.0);
   kg_ready_ = settled_ = false;  // kept in the old lists' order
-  // Each element's position (the ring's after the owned) and neighbours.
-  auto place = [](const ActiveList& own, const ActiveList& ring, std::vector<int32_t>& at, auto&& ends) {
-    std::fill(at.begin(), at.end(), -1);
-    auto put = [&](int64_t s, int64_t pos) {
-      at[s] = int32_t(pos);
-      ends(s, pos);
-    };
-    for (int64_t k = 0; k < own.size(); ++k) put(own.items[k], k);
-    for (int64_t k = 0; k < ring.size(); ++k) put(ring.items[k], own.size() + k);
+  if (!std::is_sorted(lists_.tiles.begin(), lists_.tiles.end()))
+    throw std::logic_error("Evaluator: the lists' tiles are not in ascending order");
+  for (const ActiveList* r : {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears})
+    if (!std::is_sorted(r->items.begin(), r->items.end()))
+      throw std::logic_error("Evaluator: the ring's slots are not in ascending order");
+  // Each element's neighbours, at its position (the ring's after the owned).
+  auto place = [](const ActiveList& own, const ActiveList& ring, auto&& ends) {
+    for (int64_t k = 0; k < own.size(); ++k) ends(own.items[k], k);
+    for (int64_t k = 0; k < ring.size(); ++k) ends(ring.items[k], own.size() + k);
   };
-  place(lists_.edges, lists_.ring_edges, at_e_,
+  place(lists_.edges, lists_.ring_edges,
         [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
-  place(lists_.triples, lists_.ring_triples, at_t_, [&](int64_t s, int64_t pos) {
+  place(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
     nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
     nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
   });
-  place(lists_.shears, lists_.ring_shears, at_s_, [&](int64_t s, int64_t pos) {
+  place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
   });
   const ActiveList& pl = lists_.particles;
@@ -182,6 +209,35 @@ void Evaluator::list_rows() {
   for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i]);
+}
+
+// A warp triple bends about the weft tangent, a weft triple about minus the
+// warp tangent: both then count bending towards -normal as positive. The
+// other yarn's tangent, less its part along the line's own: the axis is
+// then normal to the line, so its edges stay clear of it (an edge along the
+// axis leaves the angle undefined: a corner folded onto its diagonal
+// neighbour laid one there). On an unsheared cloth nothing changes.
+void Evaluator::freeze_bend_axes(const double* x1) {
+  list_rows(false);
+  axes_stale_ = false;
+  auto tangent = [&](int64_t p, int d) {
+    const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
+    const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
+    V t = at(x1, b) - at(x1, a);
+    const double len = std::sqrt(dot(t, t));
+    return len > 0 ? (1.0 / len) * t : V{0, 0, 0};
+  };
+  auto axis = [](const V& other, const V& own) {
+    const V a = other - dot(other, own) * own;
+    const double len = std::sqrt(dot(a, a));
+    return len > 1e-3 ? (1.0 / len) * a : other;
+  };
+  // Each triple's own entry: any schedule writes the same numbers.
+  for_triples([&](int64_t s, int64_t pos) {
+    const int64_t p = s >> 1;
+    const V warp = tangent(p, 0), weft = tangent(p, 1);
+    store3((s & 1) == 0 ? axis(weft, warp) : -1.0 * axis(warp, weft), &axis_t_[3 * pos]);
+  });
 }
 
 // ---- pass 1: element forces and band costs -------------------------------
@@ -222,7 +278,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   const int64_t q = nb_e_[pos];
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
-  const Band::Stop st = m_.stretch[d].stop(c_.anchor[s], bv);
+  const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
   if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
@@ -241,7 +297,7 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* s
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V g[3];
-  const V n = load3<double>(&c_.bend_axis[3 * s]);
+  const V n = load3<double>(&axis_t_[3 * pos]);
   const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
   triple_band(s, pos, th, g, z, settle);
 }
@@ -253,7 +309,7 @@ void Evaluator::triple_four(const ItemRun& run, int64_t k, const double* z, Trip
     t.a[l] = at(z, ids[l][0]);
     t.b[l] = at(z, ids[l][1]);
     t.c[l] = at(z, ids[l][2]);
-    t.n[l] = load3<double>(&c_.bend_axis[3 * s]);
+    t.n[l] = load3<double>(&axis_t_[3 * (run.base + k + l)]);
   }
 }
 
@@ -277,7 +333,7 @@ void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], con
   const int d = int(s & 1);
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const BandValue bv = m_.bend[d].at(th / Lm);
-  const Band::Stop st = m_.bend[d].stop(c_.anchor[c_.layout.moment() - c_.layout.tension() + s], bv);
+  const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
   if (settle && keep_) kept_gradients(w * st.df_dq / Lm, g, 3, &kg_t_[kKgTriple * pos]);
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
@@ -299,7 +355,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const double phi = shear_cell(a.x, g);
   const double A = c_.shear_area[s];
   const BandValue bv = m_.shear.at(phi);
-  const Band::Stop st = m_.shear.stop(c_.anchor[c_.layout.shear() - c_.layout.tension() + s], bv);
+  const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
   if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
@@ -315,12 +371,10 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
-void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z) {
-  double* rho = &rho_[3 * p];
+double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho) {
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
-    cost_p_[p] = 0;
-    return;
+    return 0;
   }
   const double* x = z + 3 * p;
   const double* x1 = &c_.x1[3 * p];
@@ -344,7 +398,7 @@ void Evaluator::particle_residual(int64_t p, const GatherRow& row, const double*
     for (int k = 0; k < 3; ++k) r[k] += hres_[3 * p + k];
   const double inv = 1.0 / m_.force_scale;
   for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
-  cost_p_[p] = 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
+  return 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
 }
 
 // ---- pass 3: element gradient contributions ------------------------------
@@ -361,7 +415,7 @@ inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) 
 void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   const int64_t p = s >> 1;
   const int64_t q = nb_e_[pos];
-  const V ra = residual_of(c_, rho_, p), rb = residual_of(c_, rho_, q);
+  const V ra = residual_of(c_, rho_grid_, p), rb = residual_of(c_, rho_grid_, q);
   V g[2], hv;
   edge_length_hv(at(z, p), at(z, q), rb - ra, g, hv);
   edge_gradient_out(s, pos, ra, rb, g, hv, z, grad);
@@ -376,8 +430,8 @@ void Evaluator::edge_gradient(const ItemRun& run, const double* z, double* grad)
         edge_four(run, k, z, e, ends);
         V ra[4], rb[4], v[4], g[4][2], hv[4];
         for (int l = 0; l < 4; ++l) {
-          ra[l] = residual_of(c_, rho_, ends[l][0]);
-          rb[l] = residual_of(c_, rho_, ends[l][1]);
+          ra[l] = residual_of(c_, rho_grid_, ends[l][0]);
+          rb[l] = residual_of(c_, rho_grid_, ends[l][1]);
           v[l] = rb[l] - ra[l];
         }
         double L[4];
@@ -402,9 +456,9 @@ void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double*
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V r[3];
-  for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_, ids[k]);
+  for (int k = 0; k < 3; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[3], hr[3];
-  bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), r, g, hr);
+  bend_gradient_hv(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), r, g, hr);
   triple_gradient_out(s, pos, r, g, hr, z, grad);
 }
 
@@ -417,7 +471,7 @@ void Evaluator::triple_gradient(const ItemRun& run, const double* z, double* gra
         triple_four(run, k, z, t, ids);
         V r[4][3], g[4][3], hr[4][3];
         for (int l = 0; l < 4; ++l)
-          for (int i = 0; i < 3; ++i) r[l][i] = residual_of(c_, rho_, ids[l][i]);
+          for (int i = 0; i < 3; ++i) r[l][i] = residual_of(c_, rho_grid_, ids[l][i]);
         bend_gradient_hv_four(t, r, g, hr);
         for (int l = 0; l < 4; ++l) triple_gradient_out(run.items[k + l], run.base + k + l, r[l], g[l], hr[l], z, grad);
       },
@@ -441,7 +495,7 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   cell_ids(s, pos, ids);
   const CellAt a = cell_at(ids, z);
   V r[4];
-  for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_, ids[k]);
+  for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[4], hr[4];
   shear_cell_hv(a.x, r, g, hr);
   const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
@@ -457,13 +511,13 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
 // ---- pass 4: gather per free particle ------------------------------------
 
 void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad) {
-  const double* rho = &rho_[3 * p];
+  const double* rho = &rho_grid_[3 * p];
   double g[3] = {0, 0, 0};
   if (m_.use_newton) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
-    if (m_.self_contact) self_.add_jtr(p, z, rho_.data(), jtr);
+    if (m_.self_contact) self_.add_jtr(p, z, rho_grid_.data(), jtr);
     const double mca = c_.mass[p] * m_.inertia_coeff();
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
@@ -480,7 +534,7 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
 CostTerms Evaluator::reduce_costs() {
   const size_t nt = lists_.tiles.size();
   double* out = partials_.data();
-  tile_sums(lists_.particles, [&](int64_t p) { return cost_p_[p]; }, out);
+  tile_sums(lists_.particles, [&](int64_t, int64_t k) { return cost_p_[k]; }, out);
   // Element costs sit in list order: an owned element's position is its
   // place in its list.
   tile_sums(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
@@ -492,12 +546,17 @@ CostTerms Evaluator::reduce_costs() {
 }
 
 // The cost pass: element forces and band costs, then each particle's
-// residual. settle: see settled_cost.
-CostTerms Evaluator::cost_pass(double* z, double* settle) {
+// residual (with `grid`, at z's indices too, for a gradient). settle: see
+// settled_cost.
+CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
   elements_then_particles([&](const ItemRun& run) { edge_forces(run, z, settle); },
                           [&](const ItemRun& run) { triple_forces(run, z, settle); },
                           [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
-                          [&](int64_t p, int64_t pos) { particle_residual(p, rows_[pos], z); });
+                          [&](int64_t p, int64_t pos) {
+                            double* rho = &rho_[3 * pos];
+                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+                            if (grid) std::copy(rho, rho + 3, &rho_grid_[3 * p]);
+                          });
   clear_hanging(hres_);
   return reduce_costs();
 }
@@ -509,7 +568,7 @@ CostTerms Evaluator::settled_cost(double* z) {
   halo_.exchange(z, Halo::kPositions);
   interpolate_hanging(z);
   refresh_pairs(z);
-  const CostTerms cost = cost_pass(z, z);
+  const CostTerms cost = cost_pass(z, z, false);
   settled_ = keep_;  // the elements' kept numbers are z's now (the particles' are not)
   kg_ready_ = false;
   return cost;
@@ -523,6 +582,7 @@ void Evaluator::size_slopes() {
   if (slopes_) return;
   slopes_ = true;
   fit_slopes(true);
+  rho_grid_.assign(3 * size_t(c_.grid.n()), 0.0);
 }
 
 void Evaluator::fit_slopes(bool exact) {
@@ -542,9 +602,9 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   interpolate_hanging(z);
   if (grad) size_slopes();
   refresh_pairs(z);
-  const CostTerms cost = cost_pass(z, nullptr);
+  const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
   if (!grad) return cost;
-  halo_.exchange_particles(rho_.data(), 3);
+  halo_.exchange_particles(rho_grid_.data(), 3);
   hanging_residuals();
   const int64_t nz = c_.layout.size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
@@ -557,8 +617,8 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   // A hanging particle's gradient: its contact term and its elements'.
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
-    contact_force(m_.contact, z + 3 * h, fc, &rho_[3 * h], jtr);
-    friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_[3 * h], jtr);
+    contact_force(m_.contact, z + 3 * h, fc, &rho_grid_[3 * h], jtr);
+    friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_grid_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
     gather_listed(row, [&](const double* c) {
       v[0] += c[0];
@@ -610,8 +670,8 @@ void Evaluator::hanging_forces(const double* z) {
 void Evaluator::hanging_residuals() {
   const std::vector<HangingLink>& hl = lists_.hanging;
   for (auto g = hl.rbegin(); g != hl.rend(); ++g) {
-    const V ra = residual_of(c_, rho_, g->a), rb = residual_of(c_, rho_, g->b);
-    store3((1 - g->t) * ra + g->t * rb, &rho_[3 * g->h]);
+    const V ra = residual_of(c_, rho_grid_, g->a), rb = residual_of(c_, rho_grid_, g->b);
+    store3((1 - g->t) * ra + g->t * rb, &rho_grid_[3 * g->h]);
   }
 }
 
@@ -631,8 +691,8 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
   // A band only stiffens its element where the force lies outside it (the
   // exact Gauss-Newton diagonal); inside, the force is free at no cost.
   const double mu = m_.memory;
-  auto band_slope = [mu, this](int64_t slot, const Band& b, double f, double q) {
-    const double stop = b.stop(c_.anchor[slot], q).df_dq;
+  auto band_slope = [mu](double anchor, const Band& b, double f, double q) {
+    const double stop = b.stop(anchor, q).df_dq;
     const double r = b.excess(f, q).dr_dq;
     return std::sqrt(r * r + mu * stop * stop);
   };
@@ -645,7 +705,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     const double L = edge_length(at(z, p), at(z, q), g);
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
     const double eps = L / L0 - 1;
-    const double geo = f * w / L, band = w * band_slope(s, m_.stretch[d], f, eps) / L0;
+    const double geo = f * w / L, band = w * band_slope(anc_e_[pos], m_.stretch[d], f, eps) / L0;
     for (int k = 0; k < 2; ++k) buf_e_[kEdgeSlot * pos + 3 * k] = (2 * geo * geo + band * band) * inv2;
     const double nf = double(c_.free(p)) + double(c_.free(q));
     diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
@@ -655,11 +715,11 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     int64_t ids[3];
     triple_ids(s, pos, ids);
     V g[3];
-    const V n = load3<double>(&c_.bend_axis[3 * s]);
+    const V n = load3<double>(&axis_t_[3 * pos]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
     const double Lm = c_.triple_rest[s], w = c_.triple_width[s], f = z[c_.layout.moment() + s];
     const double slope =
-        band_slope(c_.layout.moment() - c_.layout.tension() + s, m_.bend[d], f, th / Lm) * w / (Lm * Lm);
+        band_slope(anc_t_[pos], m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
     for (int k = 0; k < 3; ++k) {
       const double g2 = dot(g[k], g[k]);
@@ -678,7 +738,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     V g[4];
     const double phi = shear_cell(a.x, g);
     const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
-    const double slope = band_slope(c_.layout.shear() - c_.layout.tension() + s, m_.shear, f, phi) * A / Lr;
+    const double slope = band_slope(anc_s_[pos], m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 4; ++k) {
       const double g2 = dot(g[k], g[k]);
@@ -725,24 +785,22 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 3); j <= std::min(gr.nj - 1, jc + 3); ++j) {
       const int64_t p = gr.id(i, j);
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, at_e_[2 * p + d], z);
-        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, at_t_[2 * p + d], z);
+        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, position_of(0, 2 * p + d), z);
+        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, position_of(1, 2 * p + d), z);
       }
-      if (c_.shear_on[p]) shear_forces(p, at_s_[p], z);
+      if (c_.shear_on[p]) shear_forces(p, position_of(2, p), z);
     }
   double sum = 0;
   for (int i = std::max(0, ic - 2); i <= std::min(gr.ni - 1, ic + 2); ++i)
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
-      if (c_.free(p)) {
-        particle_residual(p, row_of(p), z);
-        sum += cost_p_[p];
-      }
+      double rho[3];  // scratch: the window's own
+      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho);
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) sum += cost_e_[at_e_[2 * p + d]];
-        if (c_.triple_on[2 * p + d]) sum += cost_t_[at_t_[2 * p + d]];
+        if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
+        if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];
       }
-      if (c_.shear_on[p]) sum += cost_s_[at_s_[p]];
+      if (c_.shear_on[p]) sum += cost_s_[position_of(2, p)];
     }
   return sum;
 }
@@ -756,8 +814,8 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   // window_cost reaches elements by slot: each active one needs a list
   // position, which holds where one rank owns every tile (this mode's case).
   for (int64_t s = 0; s < 2 * gr.n(); ++s)
-    if ((c_.edge_on[s] && at_e_[s] < 0) || (c_.triple_on[s] && at_t_[s] < 0) ||
-        (s < gr.n() && c_.shear_on[s] && at_s_[s] < 0))
+    if ((c_.edge_on[s] && position_of(0, s) < 0) || (c_.triple_on[s] && position_of(1, s) < 0) ||
+        (s < gr.n() && c_.shear_on[s] && position_of(2, s) < 0))
       throw std::logic_error("numeric gradient: an active element in no list (it needs every tile on one rank)");
   const double hmin = std::min(gr.hi, gr.hj), F0 = m_.force_scale;
   auto diff = [&](int64_t u, int64_t p, double scale) {

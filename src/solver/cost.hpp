@@ -75,10 +75,30 @@ class Evaluator {
   // is the Newton term alone, a function of the positions.
   void hysteresis_forces(double* z);
   // At a step's start: turns the step-start forces (z's force slots) into
-  // Band::anchor values in `anchor` (laid out as Cloth::anchor, from the
-  // tension block on), with the strains at positions x1 (whose ghost and
+  // Band::anchor values, each listed element's (in list order, as the
+  // element buffers), with the strains at positions x1 (whose ghost and
   // hanging entries must be current) and the ring's forces in z current.
-  void hysteresis_anchors(const double* x1, const double* z, double* anchor);
+  // After a list change, an entry point that reads them before this is
+  // called computes them from the cloth's x1 and z: they always belong to
+  // the present lists.
+  void hysteresis_anchors(const double* x1, const double* z);
+  // Element slot s's anchor (kind 0 edge, 1 triple, 2 cell); NaN where s is
+  // in no list.
+  double anchor(int kind, int64_t s) const {
+    const std::vector<double>* a[3] = {&anc_e_, &anc_t_, &anc_s_};
+    const int64_t pos = position_of(kind, s);
+    return pos >= 0 ? (*a[kind])[size_t(pos)] : std::nan("");
+  }
+  // Each listed triple's bending axis (its own and the ring's) from the
+  // positions x1, frozen until the next call: the time loop's at a step's
+  // start (ghosts current). After a list change, an entry point that reads
+  // them before this is called freezes them from the cloth's x1.
+  void freeze_bend_axes(const double* x1);
+  // Triple slot s's axis (3 values), nullptr where s is in no list.
+  const double* bend_axis(int64_t s) const {
+    const int64_t pos = position_of(1, s);
+    return pos >= 0 ? &axis_t_[3 * size_t(pos)] : nullptr;
+  }
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
@@ -112,8 +132,15 @@ class Evaluator {
   // rank does not own are left out (one rank sees the whole operator).
   void assemble_stiffness(BlockMatrix& K);
 
-  // Newton residual (scaled, 3 per particle) of the last evaluate().
+  // Newton residual (scaled) of the last evaluation, 3 per free particle in
+  // the particle list's order (lists().particles.items[r] at 3 r): the
+  // compact vectors' order (Newton reads it as its right-hand side).
   const std::vector<double>& residual() const { return rho_; }
+  // The same at z's position indices, with the ghosts' (from their owners)
+  // and the hanging particles' (their ends', interpolated): what the
+  // gradient's element passes read. Held only once a gradient was asked for
+  // (empty in Newton's runs); the last evaluate() with a gradient's.
+  const std::vector<double>& gradient_residual() const { return rho_grid_; }
 
   const ActiveLists& lists() const { return lists_; }
   // The arrays indexed by list position (element buffers, kept numbers,
@@ -157,7 +184,7 @@ class Evaluator {
   // The four triples at run positions k..k+3: their positions and axes, their particles.
   void triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const;
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
-  CostTerms cost_pass(double* z, double* settle);
+  CostTerms cost_pass(double* z, double* settle, bool grid);
   void size_slopes();
   // Sizes the arrays kept in list order (and the rows) for the lists now:
   // grown where a list outgrew them (with an eighth to spare), else kept;
@@ -171,7 +198,8 @@ class Evaluator {
   void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
   void triple_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
-  void particle_residual(int64_t p, const GatherRow& row, const double* z);
+  // Particle p's scaled residual into rho (3); returns its Newton cost.
+  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void edge_gradient(const ItemRun& run, const double* z, double* grad);
   void edge_gradient_out(int64_t s, int64_t pos, const V3<double>& ra, const V3<double>& rb, const V3<double> g[2],
@@ -231,8 +259,11 @@ class Evaluator {
   }
   // Hanging particle i's (of lists_.hanging): kept after the particle list's.
   const GatherRow& hanging_row(size_t i) const { return rows_[lists_.particles.size() + i]; }
-  // Refreshes rows_ and the slot maps when the lists have changed.
-  void list_rows();
+  // Refreshes rows_ and the neighbours when the lists have changed (and,
+  // with `derive`, the axes and anchors where a list change left them stale).
+  void list_rows(bool derive = true);
+  void build_rows();
+  bool axes_stale_ = false, anchors_stale_ = false;
   CostTerms reduce_costs();
   // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
   // order: the element forces on them into their ends' residuals; residuals
@@ -254,13 +285,14 @@ class Evaluator {
   const Halo& halo_;
   static_assert(kShearSlot == 12 && kEdgeSlot == 6 && kTripleSlot == 9, "buffer slots: 2, 3, 4 particles x 3");
   std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (6, 9, 12), list order
-  std::vector<double> cost_p_;                    // per particle (grid index)
+  std::vector<double> cost_p_;                    // Newton cost per free particle, list order
   // Per element, in list order like buf_*: a coarse mesh's elements lie far
   // apart in grid order, one cache line each per array.
   std::vector<double> cost_e_, cost_t_, cost_s_;  // band cost
   std::vector<double> gq_e_, gq_t_, gq_s_;        // band cost slope along dk/dx
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
-  std::vector<double> rho_;                       // scaled Newton residual, 3 per particle
+  std::vector<double> rho_;                       // scaled Newton residual, 3 per free particle, list order
+  std::vector<double> rho_grid_;                  // the same at z's indices, ghosts too (gradients only)
   std::vector<double> k_slope_e_, k_slope_t_, k_slope_s_;  // K's frozen band slopes, list order
   std::vector<double> k_tension_;                 // and edge tensions
   // stiffness_product's z-only numbers (keep_products), the elements' by
@@ -307,17 +339,22 @@ class Evaluator {
   // element pass streams through them and a particle finds its elements'
   // entries on nearby lines. rows_: each owned particle's entries (by its
   // position in the particle list), then each hanging particle's
-  // (hanging_row); at_e_, at_t_, at_s_: slot -> position, -1 where the slot
-  // is in no list (by slot: the grid's size). For rows_stamp_'s lists and
-  // rows_hanging_ hanging particles. All but the slot maps are sized by the
-  // lists (fit_arrays): on several ranks, or on a coarse mesh, they hold
-  // this rank's elements only.
+  // (hanging_row), for rows_stamp_'s lists and rows_hanging_ hanging
+  // particles. Sized by the lists (fit_arrays): on several ranks, or on a
+  // coarse mesh, they hold this rank's elements only. No map by slot: a
+  // slot's position is searched for in its list (position_of).
   std::vector<GatherRow> rows_;
-  std::vector<int32_t> at_e_, at_t_, at_s_;
+  // Slot s of kind (0 edge, 1 triple, 2 cell): its position, -1 in no list.
+  int64_t position_of(int kind, int64_t s) const;
   // The neighbour tables' entries each element reads, in list order too:
   // an edge's far end, a triple's previous and next particles, a cell's
   // corners 1-3 (the tables' own lines are one per element on a coarse mesh).
   std::vector<int32_t> nb_e_, nb_t_, nb_s_;
+  // Each triple's bending axis (3 doubles), in list order too.
+  std::vector<double> axis_t_;
+  // Each element's band anchor (hysteresis_anchors), in list order too.
+  std::vector<double> anc_e_, anc_t_, anc_s_;
+  uint64_t derived_stamp_ = 0;  // the lists the axes and anchors were laid out for
   void triple_ids(int64_t s, int64_t pos, int64_t ids[3]) const {
     ids[0] = nb_t_[2 * pos];
     ids[1] = s >> 1;

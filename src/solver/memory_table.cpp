@@ -22,14 +22,12 @@ void add_memory(MemoryTable& t, const Cloth& c) {
   const char* o = "Cloth";
   t.add(o, "z (positions, forces)", c.z);
   t.add(o, "x1, x2 (earlier positions)", cap(c.x1) + cap(c.x2));
-  t.add(o, "anchor (step-start forces)", c.anchor);
   t.add(o, "mass, flags, level", cap(c.mass) + cap(c.flags) + cap(c.level));
   t.add(o, "next, prev (neighbour tables)", cap(c.next[0]) + cap(c.next[1]) + cap(c.prev[0]) + cap(c.prev[1]));
   t.add(o, "element switches", cap(c.edge_on) + cap(c.triple_on) + cap(c.shear_on));
   size_t cells = 0;
   for (int k = 0; k < 3; ++k) cells += cap(c.cell[k]) + cap(c.corner_of[k]);
   t.add(o, "cell, corner_of (shear cells' corners)", cells);
-  t.add(o, "bend_axis", c.bend_axis);
   t.add(o, "rest geometry (lengths, widths, areas)",
         cap(c.edge_rest) + cap(c.edge_width) + cap(c.triple_rest) + cap(c.triple_width) + cap(c.shear_area) +
             cap(c.shear_rest));

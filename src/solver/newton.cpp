@@ -97,7 +97,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   // The diagonal at z's indices lands in K p's vector: it is read once, into
   // dc, before the first product overwrites it.
   double* diag = kp;
-  const double* rho = ev.residual().data();
+  const double* rho = ev.residual().data();  // in the compact order
   const int64_t end = c_.layout.tension();
   const bool mg = pc_ == Preconditioner::Multigrid;
   {
@@ -114,7 +114,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     ScopedPhase ph(tm, kVector);
     double sums[2];  // b.b, r.s with b = -rho: one pass, the diagonal's s on the way
     dots_.tile_sums<2>(end, [&](int64_t c, int64_t k, double* acc) {
-      const double b = -rho[k];
+      const double b = -rho[c];
       dc[c] = diag[k];
       d[c] = 0;
       r[c] = b;
@@ -131,7 +131,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     {
       ScopedPhase ph(tm, kVector);
       dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
-        const double b = -rho[k];
+        const double b = -rho[c];
         d[c] = 0;
         r[c] = b;
         acc[0] += b * b;

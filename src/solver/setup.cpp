@@ -83,7 +83,6 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   c.x1.assign(3 * n, 0.0);
   c.x2.assign(3 * n, 0.0);
   c.mass.assign(n, 0.0);
-  c.anchor.assign(5 * n, 0.0);
   c.flags.assign(n, kActive);
   c.level.assign(n, 0);
   c.edge_on.assign(2 * n, 0);
@@ -93,7 +92,6 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
     c.cell[k].assign(n, -1);
     c.corner_of[k].assign(n, -1);
   }
-  c.bend_axis.assign(6 * n, 0.0);
   for (auto* v : {&c.edge_rest, &c.edge_width, &c.triple_rest, &c.triple_width})
     v->assign(2 * n, 0.0);
   c.shear_area.assign(n, 0.0);

@@ -29,10 +29,9 @@ inline double edge_strain(const Cloth& c, const double* x, int64_t s, int64_t q)
   V g[2];
   return edge_length(at(x, s >> 1), at(x, q), g) / c.edge_rest[s] - 1;
 }
-inline double triple_curvature(const Cloth& c, const double* x, int64_t s, const int64_t ids[3]) {
+inline double triple_curvature(const Cloth& c, const double* x, int64_t s, const int64_t ids[3], const double* axis) {
   V g[3];
-  return bend_angle(at(x, ids[0]), at(x, ids[1]), at(x, ids[2]), load3<double>(&c.bend_axis[3 * s]), g) /
-         c.triple_rest[s];
+  return bend_angle(at(x, ids[0]), at(x, ids[1]), at(x, ids[2]), load3<double>(axis), g) / c.triple_rest[s];
 }
 inline double shear_strain(const double* x, const int64_t ids[4]) {
   const CellAt a = cell_at(ids, x);
@@ -47,7 +46,7 @@ double Evaluator::edge_strain_at(const double* x, int64_t s, int64_t pos) const 
 double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos) const {
   int64_t ids[3];
   triple_ids(s, pos, ids);
-  return triple_curvature(c_, x, s, ids);
+  return triple_curvature(c_, x, s, ids, &axis_t_[3 * pos]);
 }
 double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos) const {
   int64_t ids[4];
@@ -61,39 +60,40 @@ void Evaluator::hysteresis_forces(double* z) {
   halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
   interpolate_hanging(z);
   const Layout& L = c_.layout;
-  const int64_t fo = L.tension();  // anchors are indexed from the tension block
   element_passes(
       [&](int64_t s, int64_t pos) {
-        z[L.tension() + s] = m_.stretch[s & 1].stop(c_.anchor[s], edge_strain_at(z, s, pos)).f;
+        z[L.tension() + s] = m_.stretch[s & 1].stop(anc_e_[pos], edge_strain_at(z, s, pos)).f;
       },
       [&](int64_t s, int64_t pos) {
-        z[L.moment() + s] = m_.bend[s & 1].stop(c_.anchor[L.moment() - fo + s], triple_curvature_at(z, s, pos)).f;
+        z[L.moment() + s] = m_.bend[s & 1].stop(anc_t_[pos], triple_curvature_at(z, s, pos)).f;
       },
       [&](int64_t s, int64_t pos) {
-        z[L.shear() + s] = m_.shear.stop(c_.anchor[L.shear() - fo + s], shear_strain_at(z, s, pos)).f;
+        z[L.shear() + s] = m_.shear.stop(anc_s_[pos], shear_strain_at(z, s, pos)).f;
       });
 }
 
-void Evaluator::hysteresis_anchors(const double* x1, const double* z, double* a) {
+void Evaluator::hysteresis_anchors(const double* x1, const double* z) {
   // Each element's step-start force f1 (z's force slots) folded into its
   // anchor; only the active elements and the ring's, the ones that read it.
-  list_rows();
+  list_rows(false);
+  if (axes_stale_) freeze_bend_axes(c_.x1.data());  // the strains read the axes
+  anchors_stale_ = false;
   settled_ = false;  // new anchors: the kept stops are not theirs
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   for_edges([&](int64_t s, int64_t pos) {
     const Band& b = m_.stretch[s & 1];
-    a[s] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain_at(x1, s, pos)) : z[fo + s];
+    anc_e_[pos] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain_at(x1, s, pos)) : z[fo + s];
   });
   for_triples([&](int64_t s, int64_t pos) {
     const Band& b = m_.bend[s & 1];
     const int64_t k = L.moment() - fo + s;
-    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature_at(x1, s, pos)) : z[fo + k];
+    anc_t_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature_at(x1, s, pos)) : z[fo + k];
   });
   for_shears([&](int64_t s, int64_t pos) {
     const Band& b = m_.shear;
     const int64_t k = L.shear() - fo + s;
-    a[k] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain_at(x1, s, pos)) : z[fo + k];
+    anc_s_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain_at(x1, s, pos)) : z[fo + k];
   });
 }
 
@@ -157,7 +157,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (fill) {
       V g[3];
-      bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
+      bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
       kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, 3, kg);
     }
     const V vk[3] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2])};
@@ -232,32 +232,30 @@ void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z, double* ke
   V g[2];
   const double len = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s];
-  const Band::Stop st = m_.stretch[s & 1].stop(c_.anchor[s], len / L0 - 1);
+  const Band::Stop st = m_.stretch[s & 1].stop(anc_e_[pos], len / L0 - 1);
   k_tension_[pos] = std::max(0.0, st.f);
   k_slope_e_[pos] = st.df_dq;
   edge_kept(z + 3 * p, z + 3 * q, len, k_tension_[pos], st.df_dq / L0, c_.edge_width[s], ke);
 }
 
 void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
-  const int64_t k = c_.layout.moment() - c_.layout.tension() + s;
   int64_t ids[3];
   triple_ids(s, pos, ids);
   V g[3];
   const double th =
-      bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&c_.bend_axis[3 * s]), g);
+      bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
   const double Lm = c_.triple_rest[s];
-  k_slope_t_[pos] = m_.bend[s & 1].stop(c_.anchor[k], th / Lm).df_dq;
+  k_slope_t_[pos] = m_.bend[s & 1].stop(anc_t_[pos], th / Lm).df_dq;
   kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / Lm, g, 3, kg);
 }
 
 void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
-  const int64_t k = c_.layout.shear() - c_.layout.tension() + s;
   int64_t ids[4];
   cell_ids(s, pos, ids);
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
-  k_slope_s_[pos] = m_.shear.stop(c_.anchor[k], phi).df_dq;
+  k_slope_s_[pos] = m_.shear.stop(anc_s_[pos], phi).df_dq;
   kept_gradients(c_.shear_area[s] * k_slope_s_[pos], g, 4, kg);
 }
 

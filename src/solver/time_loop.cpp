@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "base/error.hpp"
+#include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/loops.hpp"
 
@@ -16,8 +17,14 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
     : c_(cloth), m_(model), lists_(lists), red_(red), halo_(halo), spec_(spec),
       ev_(cloth, model, lists, tiling, policy, red, halo), cg_(cloth, lists, tiling, red),
       newton_(cloth, cg_, spec.preconditioner) {
-  z_saved_.assign(cloth.z.size(), 0.0);
+  fit_saved(true);
   free_ = red.sum_i64(lists.particles.size());
+}
+
+// Sized by this rank's unknowns (the lists'), as the evaluator's arrays.
+void TimeLoop::fit_saved(bool exact) {
+  const size_t need = size_t(cg_.unknowns_below(c_.layout.size()));
+  fit(z_saved_, need, c_.z.size(), exact, 0.0);
 }
 
 void TimeLoop::memory(MemoryTable& t) const {
@@ -27,50 +34,21 @@ void TimeLoop::memory(MemoryTable& t) const {
   t.add("TimeLoop", "saved unknowns (a step's retry)", z_saved_);
 }
 
-void TimeLoop::freeze_bend_axes() {
-  const double* x1 = c_.x1.data();
-  auto tangent = [&](int64_t p, int d) {
-    const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
-    const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
-    V3<double> t = load3<double>(x1 + 3 * b) - load3<double>(x1 + 3 * a);
-    const double len = std::sqrt(dot(t, t));
-    return len > 0 ? (1.0 / len) * t : V3<double>{0, 0, 0};
-  };
-  // The other yarn's tangent, less its part along the line's own: the axis
-  // is then normal to the line, so its edges stay clear of it (an edge along
-  // the axis leaves the angle undefined: a corner folded onto its diagonal
-  // neighbour laid one there). On an unsheared cloth nothing changes.
-  auto axis = [](const V3<double>& other, const V3<double>& own) {
-    const V3<double> a = other - dot(other, own) * own;
-    const double len = std::sqrt(dot(a, a));
-    return len > 1e-3 ? (1.0 / len) * a : other;
-  };
-  // Over the active triples and the ring's, the ones that read an axis (not
-  // the whole grid: a coarse mesh's step would pay for every finest particle).
-  for (const ActiveList* l : {&lists_.triples, &lists_.ring_triples}) {
-    const int64_t n = l->size();
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) {
-      // A warp triple bends about the weft tangent, a weft triple about minus
-      // the warp tangent: both then count bending towards -normal as positive.
-      const int64_t s = l->items[k], p = s >> 1;
-      const V3<double> warp = tangent(p, 0), weft = tangent(p, 1);
-      if ((s & 1) == 0) store3(axis(weft, warp), &c_.bend_axis[3 * s]);
-      else store3(-1.0 * axis(warp, weft), &c_.bend_axis[3 * s]);
-    }
-  }
-}
+void TimeLoop::freeze_bend_axes() { ev_.freeze_bend_axes(c_.x1.data()); }
 
+// Packed in the compact numbering of all the unknowns (Minimizer's, tile by
+// tile): a rank holds its own only.
 void TimeLoop::save_unknowns() {
+  fit_saved(false);  // the lists changed without mesh_changed (tests): grows here
   const double* z = c_.z.data();
   double* s = z_saved_.data();
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { s[k] = z[k]; });
+  cg_.for_each_unknown(c_.layout.size(), [&](int64_t c, int64_t k) { s[c] = z[k]; });
 }
 
 void TimeLoop::restore_unknowns() {
   double* z = c_.z.data();
   const double* s = z_saved_.data();
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { z[k] = s[k]; });
+  cg_.for_each_unknown(c_.layout.size(), [&](int64_t c, int64_t k) { z[k] = s[c]; });
 }
 
 void TimeLoop::refresh_ghosts(bool history) {
@@ -148,9 +126,10 @@ void TimeLoop::check_finite(const StepStats& st) const {
   if (std::isfinite(st.cost.total())) return;
   const Grid& g = c_.grid;
   const std::vector<double>& rho = ev_.residual();
-  for (int64_t p : lists_.particles.items)
+  const ActiveList& L = lists_.particles;
+  for (int64_t r = 0; r < L.size(); ++r)
     for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(c_.z[3 * p + k]) || !std::isfinite(rho[3 * p + k])) {
+      if (const int64_t p = L.items[r]; !std::isfinite(c_.z[3 * p + k]) || !std::isfinite(rho[3 * r + k])) {
         std::ostringstream os;
         os << "numerical failure at step " << st.step << ", iteration " << st.iterations
            << ": non-finite position or force residual at particle (" << g.i_of(p) << ", "
@@ -231,7 +210,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
   ev_.interpolate_hanging(c_.x1.data());           // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();
-  ev_.hysteresis_anchors(c_.x1.data(), c_.z.data(), c_.anchor.data());
+  ev_.hysteresis_anchors(c_.x1.data(), c_.z.data());
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;
   cs.tolerance = spec_.tolerance;

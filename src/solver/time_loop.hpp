@@ -76,6 +76,7 @@ class TimeLoop {
   void mesh_changed(bool new_stage = false) {
     ev_.fit_to_lists(new_stage);
     newton_.fit_vectors(ev_);
+    fit_saved(new_stage);
     free_ = red_.sum_i64(lists_.particles.size());
   }
 
@@ -91,6 +92,7 @@ class TimeLoop {
   void stop_at_margin(int64_t p);
   void stop_all_at_margin();
   double margin_overshoot() const;
+  void fit_saved(bool exact);
   void save_unknowns();
   void restore_unknowns();
   void accept(StepStats& st);
@@ -105,7 +107,7 @@ class TimeLoop {
   Evaluator ev_;
   Minimizer cg_;
   NewtonSolver newton_;
-  std::vector<double> z_saved_;
+  std::vector<double> z_saved_;  // this rank's unknowns at the step's start, compact
   int64_t free_ = 0;
 };
 

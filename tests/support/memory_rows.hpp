@@ -1,0 +1,40 @@
+#pragma once
+// The solvers' arrays that still follow the grid, by name: the product's operand and result at z's indices, and
+// what only a gradient (the nonlinear CG's), AMRC's hanging particles or
+// K's assembly hold. Every other array of the evaluator's, Newton's and the
+// time loop's tables holds this rank's listed elements, rows or unknowns
+// (test_memory, test_mpi_memory_np2 check it).
+#include <map>
+#include <string>
+
+#include "solver/memory_table.hpp"
+#include "solver/time_loop.hpp"
+
+namespace drape::test {
+
+inline bool follows_the_grid(const MemoryTable::Row& r) {
+  static const char* const named[] = {
+      "Evaluator: residual at z's positions (gradients only)",
+      "Evaluator: hanging particles' forces and results",
+      "Evaluator: assembly maps",
+      "Evaluator: numeric gradient's copy of z",
+      "NewtonSolver: p, K p (at z's positions)",
+      "Minimizer: g, g new, s, d, zt, diagonal (nonlinear CG)",
+  };
+  const std::string key = r.owner + ": " + r.array;
+  for (const char* n : named)
+    if (key == n) return true;
+  return false;
+}
+
+// The time loop's rows (evaluator, solvers, saved unknowns) but those.
+inline std::map<std::string, size_t> list_sized_rows(const TimeLoop& loop) {
+  MemoryTable t;
+  loop.memory(t);
+  std::map<std::string, size_t> rows;
+  for (const MemoryTable::Row& r : t.rows)
+    if (!follows_the_grid(r)) rows[r.owner + ": " + r.array] += r.bytes;
+  return rows;
+}
+
+}  // namespace drape::test
