@@ -33,6 +33,7 @@
 #include "io/json.hpp"
 #include "io/output.hpp"
 #include "solver/checksum.hpp"
+#include "solver/drape_coefficient.hpp"
 #include "solver/time_loop.hpp"
 
 namespace drape {
@@ -188,7 +189,9 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       sum.first_step = cloth.step;
     }
     // The uniform level amrc.start_spacing asks a new run to start on (0: the finest).
-    const int start_level = sequence_start_level(cloth.grid, scene.amrc.start_spacing);
+    // A disc specimen is cut from the finest grid only: no coarse stages.
+    const int start_level =
+        scene.cloth.shape == ClothShape::Disc ? 0 : sequence_start_level(cloth.grid, scene.amrc.start_spacing);
     // A restart goes on on its checkpoint's mesh: the finest one where it holds no tree.
     if (!scene.amrc.enabled && !(opt.restart && opt.restart->amrc_levels.empty())) sequence_level = start_level;
     if (scene.amrc.enabled || sequence_level > 0) {  // from the finest mesh (paper), or the checkpoint's
@@ -474,7 +477,7 @@ int run_simulation(const Scene& scene, const Fabric& fabric, const RunOptions& o
       ScopedPhase ph(tm, kOutput);
       if (cloth.step != last_frame) write_frame();  // the final state
       h5->finish();
-      if (scene.output.picture) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
+      if (scene.output.picture || is_drape_test(scene)) gather_on_root(cloth.x(), 3, tiling, dec.partition.owner, comm);
       if (scene.output.picture)
         on_root_agreed(comm, [&] {
           render_picture(frame_of(cloth, blocks), scene.obstacle, opt.output_dir + "/drape.png", 1024, 768,
