@@ -45,12 +45,15 @@ Scene cusick_scene(int n) {
 
 // The overhang beyond the disc's rim folded down so that its projection
 // reaches `share` of the way out: the shadow is then a ring of known width.
-void fold_overhang(Cloth& c, double r_disc, double share) {
+// With waves > 0 the share swings by 0.35 about it, `waves` times around:
+// an outline of that many nodes.
+void fold_overhang(Cloth& c, double r_disc, double share, int waves = 0) {
   for (int64_t p = 0; p < c.grid.n(); ++p) {
     double* x = c.x() + 3 * p;
     const double rho = std::hypot(x[0], x[1]);
     if (rho <= r_disc) continue;
-    const double out = r_disc + share * (rho - r_disc);
+    const double s = waves > 0 ? share + 0.35 * std::cos(waves * std::atan2(x[1], x[0])) : share;
+    const double out = r_disc + s * (rho - r_disc);
     x[2] -= std::sqrt(std::max(0.0, (rho - r_disc) * (rho - r_disc) - (out - r_disc) * (out - r_disc)));
     x[0] *= out / rho;
     x[1] *= out / rho;
@@ -134,8 +137,8 @@ TEST(DiscCloth, NoElementTouchesARemovedParticle) {
       EXPECT_EQ(c.mass[p], 0.0);
     }
     for (int d = 0; d < 2; ++d) {
-      if (c.edge_on[2 * p + d]) EXPECT_TRUE(ok(p) && ok(c.next[d][p])) << p;
-      if (c.triple_on[2 * p + d]) EXPECT_TRUE(ok(p) && ok(c.next[d][p]) && ok(c.prev[d][p])) << p;
+      EXPECT_TRUE(!c.edge_on[2 * p + d] || (ok(p) && ok(c.next[d][p]))) << p;
+      EXPECT_TRUE(!c.triple_on[2 * p + d] || (ok(p) && ok(c.next[d][p]) && ok(c.prev[d][p]))) << p;
     }
     if (c.shear_on[p]) {
       ++cells;
@@ -158,6 +161,7 @@ TEST(DrapeCoefficient, FlatSpecimenReadsOne) {
   EXPECT_EQ(t.coefficient, 1.0);
   EXPECT_NEAR(t.disc, M_PI * 0.09 * 0.09, 1e-3 * t.disc);
   EXPECT_NEAR(t.specimen, M_PI * 0.15 * 0.15, 0.005 * t.specimen);
+  EXPECT_EQ(t.nodes, 0) << "a flat specimen has no folds";
 }
 
 TEST(DrapeCoefficient, HangingStraightDownReadsZero) {
@@ -167,6 +171,7 @@ TEST(DrapeCoefficient, HangingStraightDownReadsZero) {
   const DrapeTest t = drape_test(c, c.x(), s);
   EXPECT_NEAR(t.coefficient, 0.0, 0.005);
   EXPECT_GE(t.shadow, t.disc);
+  EXPECT_EQ(t.nodes, 0);
 }
 
 // Folded down to reach halfway out: a ring from 9 to 12 cm (of 9 to 15).
@@ -177,4 +182,14 @@ TEST(DrapeCoefficient, HalfwayOutReadsTheRingsShare) {
   const DrapeTest t = drape_test(c, c.x(), s);
   const double ring = (0.12 * 0.12 - 0.09 * 0.09) / (0.15 * 0.15 - 0.09 * 0.09);
   EXPECT_NEAR(t.coefficient, ring, 0.02);
+}
+
+// An outline that swings out and back 4, 6 and 9 times around.
+TEST(DrapeCoefficient, CountsTheNodesOfTheOutline) {
+  const Scene s = cusick_scene(129);
+  for (int waves : {4, 6, 9}) {
+    Cloth c = make_cloth(s, test_fabric());
+    fold_overhang(c, 0.09, 0.5, waves);
+    EXPECT_EQ(drape_test(c, c.x(), s).nodes, waves);
+  }
 }

@@ -202,6 +202,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   if (is_drape_test(scene)) {  // positions gathered on this rank (run.cpp)
     const DrapeTest t = drape_test(cloth, cloth.x(), scene);
     j.value("drape_coefficient", t.coefficient);
+    j.value("drape_nodes", t.nodes);
     j.begin_object("drape_areas").value("shadow", t.shadow).value("specimen", t.specimen).value("disc", t.disc).end_object();
   }
   j.value("total_mass", cloth.total_mass());

@@ -79,6 +79,46 @@ std::vector<double> rest_positions(const Cloth& c, const ClothSpec& s) {
   return x;
 }
 
+// The shadow's outline radius about (cx, cy) at each whole degree: the last
+// covered pixel along the ray, stepping half a pixel.
+std::vector<double> outline(const Raster& r, double cx, double cy) {
+  std::vector<double> out(360, 0.0);
+  const double reach = 0.5 * r.n * r.h * std::sqrt(2.0);
+  for (int k = 0; k < 360; ++k) {
+    const double a = 2 * M_PI * k / 360, ux = std::cos(a), uy = std::sin(a);
+    for (double t = 0; t <= reach; t += 0.5 * r.h) {
+      const int i = int(std::floor((cx + t * ux - r.x0) / r.h)), j = int(std::floor((cy + t * uy - r.y0) / r.h));
+      if (i < 0 || j < 0 || i >= r.n || j >= r.n) break;
+      if (r.on[size_t(i) * r.n + j]) out[k] = t;
+    }
+  }
+  return out;
+}
+
+// Rises from below mean - swing/6 to above mean + swing/6, once per node.
+int count_nodes(const std::vector<double>& rad, double least_swing) {
+  const auto [lo, hi] = std::minmax_element(rad.begin(), rad.end());
+  if (*hi - *lo < least_swing) return 0;
+  double mean = 0;
+  for (double v : rad) mean += v;
+  mean /= double(rad.size());
+  const double up = mean + (*hi - mean) / 3, down = mean - (mean - *lo) / 3;
+  // Start where the outline is low, so each rise is counted once around.
+  const size_t start = size_t(lo - rad.begin());
+  int nodes = 0;
+  bool low = true;
+  for (size_t k = 0; k <= rad.size(); ++k) {
+    const double v = rad[(start + k) % rad.size()];
+    if (low && v > up) {
+      ++nodes;
+      low = false;
+    } else if (!low && v < down) {
+      low = true;
+    }
+  }
+  return nodes;
+}
+
 }  // namespace
 
 bool is_drape_test(const Scene& s) {
@@ -98,6 +138,9 @@ DrapeTest drape_test(const Cloth& c, const double* x, const Scene& s, int pixels
   t.disc = r.area();
   fill_cells(r, c, x);
   t.shadow = r.area();
+  // The cut's staircase alone swings the outline by up to about a spacing.
+  const double least_swing = std::max(0.02 * 0.5 * s.cloth.size[0], 2 * std::max(c.grid.hi, c.grid.hj));
+  t.nodes = count_nodes(outline(r, s.obstacle.center[0], s.obstacle.center[1]), least_swing);
   r.on.assign(r.on.size(), 0);
   fill_cells(r, c, rest_positions(c, s.cloth).data());
   fill_disc(r, s.obstacle);

@@ -17,6 +17,12 @@ struct DrapeTest {
   double shadow = 0;       // m^2: S
   double specimen = 0;     // m^2: F
   double disc = 0;         // m^2: D
+  // The folds ("nodes") the shadow's outline makes: the outline's radius
+  // about the disc's axis, r(angle) at every degree, rises above and falls
+  // back below its mean once per node (by a third of the way to its highest
+  // and lowest, so that ripples of the cut's staircase do not count); 0 when the swing is
+  // under two spacings (the staircase's own) or 2 % of the specimen's radius.
+  int nodes = 0;
 };
 
 // Whether the scene is a drape test: a disc cloth on a disc obstacle.
