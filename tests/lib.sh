@@ -5,6 +5,10 @@
 #   field DIR KEY     a top-level entry
 #   sum DIR           the run's state checksum; without one "missing:DIR",
 #                     so that two runs without a checksum never agree
+#   checkpoint_step DRAPE FILE   the step a checkpoint holds, from --dry-run's
+#                     first line (read whole: a reader that stops early would
+#                     end the program by SIGPIPE once its output passes a
+#                     pipe's buffer)
 report() {
   python3 - "$1/report.json" "$2" <<'PY'
 import json, sys
@@ -18,4 +22,10 @@ sum() {
   local s
   s=$(field "$1" state_checksum 2>/dev/null) || true
   [[ $s =~ ^[0-9a-f]{32}$ ]] && echo "$s" || echo "missing:$1"
+}
+checkpoint_step() {
+  local out
+  out=$("$1" --restart "$2" --dry-run) || return 1
+  out=${out%%$'\n'*}
+  [[ $out =~ " at step "([0-9]+)$ ]] && echo "${BASH_REMATCH[1]}"
 }

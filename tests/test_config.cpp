@@ -71,6 +71,7 @@ std::vector<std::string> differences(const Scene& a, const Scene& b) {
   differ(same(ac.compression, bc.compression), "cloth.compression");
   differ(same(ac.height, bc.height), "cloth.height");
   differ(same(ac.center, bc.center), "cloth.center");
+  differ(ac.shape == bc.shape, "cloth.shape");
   const auto &ao = a.obstacle, &bo = b.obstacle;
   differ(ao.shape == bo.shape, "obstacle.shape");
   differ(same(ao.center, bo.center), "obstacle.center");
@@ -229,6 +230,7 @@ TEST(Config, EveryFieldIsCompared) {
       {"cloth.compression", "0.2"},
       {"cloth.height", "0.5"},
       {"cloth.center", "[0.1, 0.0]"},
+      {"cloth.shape", "\"disc\""},
       {"obstacle.shape", "\"sphere\""},
       {"obstacle.center", "[0.0, 0.0, 0.3]"},
       {"obstacle.size", "[0.4, 0.4, 0.3]"},
@@ -367,9 +369,19 @@ TEST(Config, ReferenceRowPerKeyWithItsDefault) {
   // 7 tables, each a heading, a blank line, the header and its rule; a blank line between.
   EXPECT_EQ(std::count(ref.begin(), ref.end(), '\n'), rows + 4 * 7 + 6) << "a row for a key --dry-run lacks";
   std::string shapes;
-  for (auto e : {drape::ObstacleShape::Box, drape::ObstacleShape::Sphere, drape::ObstacleShape::None})
+  for (auto e : {drape::ObstacleShape::Box, drape::ObstacleShape::Sphere, drape::ObstacleShape::None,
+                 drape::ObstacleShape::Disc})
     shapes += std::string(shapes.empty() ? "`" : ", `") + to_string(e) + "`";
   EXPECT_NE(ref.find("| `obstacle.shape` | `\"box\"` |  | " + shapes + " |"), std::string::npos) << ref;
+}
+
+// The circular specimen is cut from a square grid, on the finest mesh only.
+TEST(Config, DiscClothNeedsASquareAndNoAmrc) {
+  EXPECT_NE(error_of(std::nullopt, {"cloth.shape=disc", "cloth.size=[0.3, 0.4]"}).find("cloth.size"),
+            std::string::npos);
+  EXPECT_NE(error_of(std::nullopt, {"cloth.shape=disc", "amrc.enabled=true"}).find("amrc.enabled"),
+            std::string::npos);
+  EXPECT_NO_THROW(drape::load_scene(std::nullopt, {"cloth.shape=disc", "obstacle.shape=disc"}));
 }
 
 TEST(Config, FileThenOverrides) {

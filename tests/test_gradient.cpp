@@ -215,6 +215,37 @@ TEST(Gradient, FrictionMatchesCentralDifferences) {
   }
 }
 
+// The drape tester's disc instead of the sphere: particles over its top,
+// beside its rim and off its round edge, with and without friction.
+TEST(Gradient, DiscObstacleMatchesCentralDifferences) {
+  for (bool friction : {false, true}) {
+    Simulation w = random_world(6);
+    Obstacle& o = w.model.contact.obstacle;
+    o.shape = ObstacleShape::Disc;
+    o.center[0] = 0.002;
+    o.center[1] = -0.001;
+    o.center[2] = -0.002;
+    o.half[2] = 0.005;
+    o.radius = 0.017;
+    int top = 0, rim = 0;
+    for (int64_t p : w.lists.particles.items) {
+      double n[3];
+      if (disc_distance(o, &w.cloth.z[3 * p], n, nullptr) >= w.model.contact.thickness) continue;
+      ++(std::fabs(n[2]) > 0.999 ? top : rim);
+    }
+    ASSERT_GT(top, 2);
+    ASSERT_GT(rim, 2);
+    if (friction) {
+      ASSERT_GT(with_friction(w), 0);
+    }
+    w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
+    std::vector<double> ga(w.cloth.z.size());
+    w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
+    const std::vector<double> gf = central_difference(w);
+    EXPECT_LE(block_errors(w, ga, gf)[0], 1e-6) << (friction ? "with friction" : "frictionless");
+  }
+}
+
 TEST(Gradient, NumericModeMatchesAnalytic) {
   Simulation w = random_world(7);
   std::vector<double> ga(w.cloth.z.size()), gn(w.cloth.z.size());

@@ -10,6 +10,7 @@
 #include "app/signals.hpp"
 #include "io/json.hpp"
 #include "solver/contact.hpp"
+#include "solver/drape_coefficient.hpp"
 
 namespace drape {
 
@@ -67,7 +68,9 @@ double max_penetration_written(const Cloth& c, const Model& m, const Tiling& til
   for (int t : owned) {
     const TileRange r = tiling.range(t);
     for (int i = r.i0; i < r.i1; ++i)
-      for (int j = r.j0; j < r.j1; ++j) worst = std::max(worst, penetration(m.contact.obstacle, c.x() + 3 * c.grid.id(i, j)));
+      for (int j = r.j0; j < r.j1; ++j)
+        if (!(c.flags[c.grid.id(i, j)] & kRemoved))  // no surface is written there
+          worst = std::max(worst, penetration(m.contact.obstacle, c.x() + 3 * c.grid.id(i, j)));
   }
   return red.max(worst);
 }
@@ -196,6 +199,12 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("zigzags", (long long)s.zigzag.zigzags)
       .value("min_turn", kZigzagTurn)
       .end_object();
+  if (is_drape_test(scene)) {  // positions gathered on this rank (Simulation::finish)
+    const DrapeTest t = drape_test(cloth, cloth.x(), scene);
+    j.value("drape_coefficient", t.coefficient);
+    j.value("drape_nodes", t.nodes);
+    j.begin_object("drape_areas").value("shadow", t.shadow).value("specimen", t.specimen).value("disc", t.disc).end_object();
+  }
   j.value("total_mass", cloth.total_mass());
   j.value("wall_seconds", wall);
   j.value("cpu_seconds", cpu);

@@ -87,7 +87,9 @@ void Simulation::set_up_mesh() {
     last_checkpoint_ = cloth.step;
   }
   // The uniform level amrc.start_spacing asks a new run to start on (0: the finest).
-  const int start_level = sequence_start_level(cloth.grid, scene.amrc.start_spacing);
+  // A disc specimen is cut from the finest grid only: no coarse stages.
+  const int start_level =
+      scene.cloth.shape == ClothShape::Disc ? 0 : sequence_start_level(cloth.grid, scene.amrc.start_spacing);
   // A restart goes on on its checkpoint's mesh: the finest one where it holds no tree.
   if (!scene.amrc.enabled && !(ck && ck->amrc_levels.empty())) sequence_level_ = start_level;
   if (scene.amrc.enabled || sequence_level_ > 0) set_up_tree(start_level);  // from the finest mesh (paper), or the checkpoint's

@@ -388,6 +388,17 @@ void check_time_steps(const Checker& check, const SolverSpec& v) {
             format_double(v.dt_max) + "], got " + format_double(v.dt));
 }
 
+// The circular specimen is cut from the finest grid once: AMRC's quadtree
+// knows nothing of the cut (grid sequencing is left out for it, run.cpp).
+void check_cloth_shape(const Checker& check, const Scene& s) {
+  const auto& c = s.cloth;
+  if (c.shape != ClothShape::Disc) return;
+  check(c.size[0] == c.size[1], "cloth.size",
+        "cloth.shape = \"disc\" cuts the disc of diameter cloth.size from a square: the two sizes must be "
+        "equal, got " + format_array(c.size));
+  check(!s.amrc.enabled, "amrc.enabled", "cloth.shape = \"disc\" runs on the finest mesh: set amrc.enabled = false");
+}
+
 void check_amrc_thresholds(const Checker& check, const AmrcSpec& a) {
   check(a.coarsen >= 0 && a.coarsen < a.refine, check.given("amrc.coarsen", "amrc.refine"),
         "amrc.coarsen must be in [0, amrc.refine) = [0, " + format_double(a.refine) + "), got " +
@@ -401,6 +412,7 @@ void validate(const Config& cfg, const Scene& s) {
   check_each_key(check, s);
   check_cloth_extent(check, s.cloth);
   check_cloth_placement(check, s);
+  check_cloth_shape(check, s);
   check_obstacle_extent(check, s.obstacle);
   check_time_steps(check, s.solver);
   check_amrc_thresholds(check, s.amrc);

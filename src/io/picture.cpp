@@ -229,6 +229,29 @@ void add_sphere(Mesh& m, const ObstacleSpec& ob, Box3& bounds) {
   bounds.add(c + V3{ob.radius, ob.radius, ob.radius});
 }
 
+// A vertical cylinder: its rim as quads, top and bottom as fans of quads.
+void add_disc(Mesh& m, const ObstacleSpec& ob, Box3& bounds) {
+  const V3 c{ob.center[0], ob.center[1], ob.center[2]};
+  const double hz = ob.size[2] / 2;
+  const int nseg = 96;
+  for (int k = 0; k < nseg; ++k) {
+    const double a0 = 2 * kPi * k / nseg, a1 = 2 * kPi * (k + 1) / nseg;
+    const V3 e0{std::cos(a0), std::sin(a0), 0}, e1{std::cos(a1), std::sin(a1), 0};
+    const V3 up{0, 0, hz}, top{0, 0, 1}, bottom{0, 0, -1};
+    const int r00 = m.add(c + ob.radius * e0 - up, e0, kObstacleColour), r01 = m.add(c + ob.radius * e1 - up, e1, kObstacleColour);
+    const int r11 = m.add(c + ob.radius * e1 + up, e1, kObstacleColour), r10 = m.add(c + ob.radius * e0 + up, e0, kObstacleColour);
+    m.quad(r00, r01, r11, r10);
+    for (const V3& n : {top, bottom}) {
+      const V3 lid = n.z > 0 ? up : -1.0 * up;
+      const int a = m.add(c + lid, n, kObstacleColour), b = m.add(c + lid + ob.radius * e0, n, kObstacleColour);
+      const int d = m.add(c + lid + ob.radius * e1, n, kObstacleColour);
+      m.tri.push_back({a, b, d});
+    }
+  }
+  bounds.add(c - V3{ob.radius, ob.radius, hz});
+  bounds.add(c + V3{ob.radius, ob.radius, hz});
+}
+
 // --------------------------------------------------------------- camera --
 
 struct Camera {
@@ -531,6 +554,7 @@ void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std:
   Mesh solid;
   if (obstacle.shape == ObstacleShape::Box) add_box(solid, obstacle, fit);
   if (obstacle.shape == ObstacleShape::Sphere) add_sphere(solid, obstacle, fit);
+  if (obstacle.shape == ObstacleShape::Disc) add_disc(solid, obstacle, fit);
   if (fit.empty()) fit.add(V3{0, 0, 0});
 
   Image img{width * ss, height * ss, {}, {}};

@@ -40,20 +40,26 @@ void declare_cloth(ParameterList& list) {
            "where the cloth gathers")
       .add("height", &ClothSpec::height, "m", any(), "m, z of the flat cloth at t = 0",
            "z of the flat cloth at t = 0 (the default box's top is at 0.4); ≥ 0 when there is a floor")
-      .add("center", &ClothSpec::center, "m", any(), "m, x-y of the cloth centre", "x-y of the cloth's centre");
+      .add("center", &ClothSpec::center, "m", any(), "m, x-y of the cloth centre", "x-y of the cloth's centre")
+      .add("shape", &ClothSpec::shape, {ClothShape::Square, ClothShape::Disc}, "square | disc (the inscribed circle)",
+           "`disc`: the circular specimen of a drape test, the grid's cells whose centres lie within size/2 of "
+           "the centre; the other particles are removed. Needs equal sizes and `amrc.enabled = false`; runs on the finest "
+           "mesh (no grid sequencing); with an `obstacle.shape = \"disc\"`, report.json gives the "
+           "`drape_coefficient`");
 }
 
 void declare_obstacle(ParameterList& list) {
   list.section("obstacle", &Scene::obstacle)
-      .add("shape", &ObstacleSpec::shape, {ObstacleShape::Box, ObstacleShape::Sphere, ObstacleShape::None},
-           "box | sphere | none", "what the cloth falls on (besides the floor)")
-      .add("center", &ObstacleSpec::center, "m", any(), "m", "the box's (or sphere's) centre")
+      .add("shape", &ObstacleSpec::shape, {ObstacleShape::Box, ObstacleShape::Sphere, ObstacleShape::None, ObstacleShape::Disc},
+           "box | sphere | none | disc", "what the cloth falls on (besides the floor); `disc`: a vertical "
+           "cylinder of `radius` and height size[2] about `center` (a drape tester's support disc)")
+      .add("center", &ObstacleSpec::center, "m", any(), "m", "the box's (sphere's, disc's) centre")
       .add("size", &ObstacleSpec::size, "m", all_of("sizes", positive()), "m, box edge lengths",
-           "the box's edge lengths along x, y, z")
-      .add("radius", &ObstacleSpec::radius, "m", positive(), "m, sphere", "the sphere's radius")
+           "the box's edge lengths along x, y, z; a disc's thickness is the z one")
+      .add("radius", &ObstacleSpec::radius, "m", positive(), "m, sphere or disc", "the sphere's (or disc's) radius")
       .add("floor", &ObstacleSpec::floor, "", any(), "plane z = 0", "a floor plane at z = 0")
-      .add("friction", &ObstacleSpec::friction, "", non_negative(), "Coulomb mu on the box or sphere (0: none)",
-           "Coulomb friction coefficient μ between cloth and the box or sphere (one μ, static and kinetic); "
+      .add("friction", &ObstacleSpec::friction, "", non_negative(), "Coulomb mu on the box, sphere or disc (0: none)",
+           "Coulomb friction coefficient μ between cloth and the box, sphere or disc (one μ, static and kinetic); "
            "0 is frictionless")
       .add("floor_friction", &ObstacleSpec::floor_friction, "", non_negative(), "Coulomb mu on the floor (0: none)",
            "Coulomb friction coefficient μ between cloth and the floor; 0 is frictionless");

@@ -18,6 +18,7 @@ enum ParticleFlag : uint8_t {
   kActive = 1,   // part of the active mesh
   kFixed = 2,    // position prescribed (clamped), not an unknown
   kHanging = 4,  // AMRC hanging particle: interpolated, not solved for
+  kRemoved = 8,  // outside the specimen (cloth.shape = "disc"): never active, no element touches it
 };
 
 struct Grid {

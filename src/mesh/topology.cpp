@@ -1,5 +1,6 @@
 #include "mesh/topology.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "mesh/quadtree.hpp"
@@ -91,6 +92,33 @@ double extent(const Cloth& c, int64_t p, int d) {
   if (c.prev[d][p] >= 0) e += 0.5 * double(p - c.prev[d][p]) / st;
   return e * c.grid.h(d);
 }
+
+// Whether a particle of the 3 x 3 block about p is removed (a disc's outline).
+bool near_removed(const Cloth& c, int64_t p) {
+  const Grid& g = c.grid;
+  const int i = g.i_of(p), j = g.j_of(p);
+  for (int a = std::max(i - 1, 0); a <= std::min(i + 1, g.ni - 1); ++a)
+    for (int b = std::max(j - 1, 0); b <= std::min(j + 1, g.nj - 1); ++b)
+      if (c.flags[g.id(a, b)] & kRemoved) return true;
+  return false;
+}
+
+// The area p stands for on a cut outline: a quarter of each cell it is a
+// corner of (a cell whose four corners are active). Extents would count a
+// missing diagonal cell at a concave corner of the staircase.
+double cell_quarters(const Cloth& c, int64_t p) {
+  const Grid& g = c.grid;
+  const int i = g.i_of(p), j = g.j_of(p);
+  double area = 0;
+  for (int a = i - 1; a <= i; ++a)
+    for (int b = j - 1; b <= j; ++b) {
+      if (a < 0 || b < 0 || a + 1 >= g.ni || b + 1 >= g.nj) continue;
+      bool whole = true;
+      for (int64_t q : {g.id(a, b), g.id(a + 1, b), g.id(a, b + 1), g.id(a + 1, b + 1)}) whole = whole && c.active(q);
+      if (whole) area += 0.25 * g.hi * g.hj;
+    }
+  return area;
+}
 }  // namespace
 
 void rebuild_geometry(Cloth& c, double density) {
@@ -99,7 +127,7 @@ void rebuild_geometry(Cloth& c, double density) {
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < n; ++p) {
     const double ext[2] = {c.active(p) ? extent(c, p, 0) : 0, c.active(p) ? extent(c, p, 1) : 0};
-    c.mass[p] = density * ext[0] * ext[1];
+    c.mass[p] = c.active(p) && near_removed(c, p) ? density * cell_quarters(c, p) : density * ext[0] * ext[1];
     double len[2] = {0, 0};
     for (int d = 0; d < 2; ++d) {
       const int64_t s = 2 * p + d;

@@ -56,6 +56,50 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
   return len - o.radius;
 }
 
+// In the (rho, z) half-plane the disc is a rectangle: the box's distance in
+// two dimensions, q_r = rho - r along the radial direction e and q_z along z.
+// Outside, d = |max(q, 0)| and n = (max(q_r, 0) e + max(q_z, 0) s_z z)/d;
+// its Hessian is (P_r e e^T + P_z z z^T + max(q_r, 0) (I_xy - e e^T)/rho
+// - n n^T)/d, P the indicators of q > 0 (e turns with x: de/dx = (I_xy -
+// e e^T)/rho). Inside, the nearer of the rim (curved) and the faces (flat).
+double disc_distance(const Obstacle& o, const double* x, double* n, double* hess) {
+  const double rx = x[0] - o.center[0], ry = x[1] - o.center[1], rz = x[2] - o.center[2];
+  const double rho = std::sqrt(rx * rx + ry * ry);
+  const double e[3] = {rho > 0 ? rx / rho : 1.0, rho > 0 ? ry / rho : 0.0, 0.0};
+  const double sz = rz >= 0 ? 1.0 : -1.0;
+  const double qr = rho - o.radius, qz = std::fabs(rz) - o.half[2];
+  if (hess) std::fill(hess, hess + 9, 0.0);
+  if (qr <= 0 && qz <= 0) {  // inside
+    // As for the box: a bottom standing on the floor is no way out.
+    const bool on_floor = o.floor && o.center[2] - o.half[2] <= o.floor_z;
+    const bool rim = qr > qz || (sz < 0 && on_floor);
+    for (int k = 0; k < 3; ++k) n[k] = rim ? e[k] : (k == 2 ? sz : 0.0);
+    if (hess && rim && rho > 0)  // the rim curves: n = e turns with x
+      for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j) hess[3 * i + j] = ((i == j) - e[i] * e[j]) / rho;
+    return rim ? qr : qz;
+  }
+  const double a = std::max(qr, 0.0), b = std::max(qz, 0.0), d = std::sqrt(a * a + b * b);
+  for (int k = 0; k < 3; ++k) n[k] = (a * e[k] + (k == 2 ? b * sz : 0.0)) / d;
+  if (hess) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        double h = -n[i] * n[j];
+        if (qr > 0) h += e[i] * e[j] + (i < 2 && j < 2 ? a * ((i == j) - e[i] * e[j]) / rho : 0.0);
+        if (qz > 0 && i == 2 && j == 2) h += 1.0;
+        hess[3 * i + j] = h / d;
+      }
+  }
+  return d;
+}
+
+double shape_distance(const Obstacle& o, const double* x, double* n, double* hess) {
+  if (o.shape == ObstacleShape::Box) return box_distance(o, x, n, hess);
+  if (o.shape == ObstacleShape::Sphere) return sphere_distance(o, x, n, hess);
+  if (o.shape == ObstacleShape::Disc) return disc_distance(o, x, n, hess);
+  return 1e300;
+}
+
 double penalty(const Contact& c, double pen, double* slope) {
   const double s = 0.5 * c.thickness, k = c.stiffness;
   *slope = pen < s ? k * pen / s : k;
@@ -117,8 +161,8 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
   if (o.shape == ObstacleShape::Box && !beyond_box_layer(o, x, c.thickness)) {
     const double d = box_distance(o, x, n, hess);
     hit |= add_surface(c, d, n, hess, force, r, jac_t_r, slope);
-  } else if (o.shape == ObstacleShape::Sphere) {
-    const double d = sphere_distance(o, x, n, hess);
+  } else if (o.shape == ObstacleShape::Sphere || o.shape == ObstacleShape::Disc) {
+    const double d = shape_distance(o, x, n, hess);
     hit |= add_surface(c, d, n, hess, force, r, jac_t_r, slope);
   }
   if (o.floor) {
@@ -128,19 +172,10 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
   return hit;
 }
 
-namespace {
-// Signed distance to the box or sphere and its outward normal n; far (1e300) without one.
-double shape_distance(const Obstacle& o, const double* x, double* n) {
-  if (o.shape == ObstacleShape::Box) return box_distance(o, x, n, nullptr);
-  if (o.shape == ObstacleShape::Sphere) return sphere_distance(o, x, n, nullptr);
-  return 1e300;
-}
-}  // namespace
-
 bool push_out(const Obstacle& o, double clearance, double* x) {
   bool moved = false;
   double n[3];
-  const double d = shape_distance(o, x, n);
+  const double d = shape_distance(o, x, n, nullptr);
   if (d < clearance) {
     for (int k = 0; k < 3; ++k) x[k] += (clearance - d) * n[k];
     moved = true;
@@ -160,7 +195,7 @@ void settle_on_surface(const Obstacle& o, double* x, double* dx) {
       for (int k = 0; k < 3; ++k) dx[k] -= into * n[k];
   };
   double n[3];
-  const double d = shape_distance(o, x, n);
+  const double d = shape_distance(o, x, n, nullptr);
   if (d < 0) settle(d, n);
   const double up[3] = {0, 0, 1};
   if (o.floor && x[2] < o.floor_z) settle(x[2] - o.floor_z, up);
@@ -168,7 +203,7 @@ void settle_on_surface(const Obstacle& o, double* x, double* dx) {
 
 double clearance(const Obstacle& o, const double* x) {
   double n[3];
-  const double d = shape_distance(o, x, n);
+  const double d = shape_distance(o, x, n, nullptr);
   return o.floor ? std::min(d, x[2] - o.floor_z) : d;
 }
 

@@ -1,5 +1,5 @@
 #pragma once
-// Rigid obstacles (box, sphere, floor) as a penalty force: a particle closer
+// Rigid obstacles (box, sphere, disc, floor) as a penalty force: a particle closer
 // than the contact thickness delta to a surface is pushed out along n, with
 // a force rising smoothly from zero at distance delta. Signed distance d, its gradient n and Hessian come from
 // the obstacle's shape; the Newton cost needs all three.
@@ -30,6 +30,11 @@ struct Contact {
 // (unit) and Hessian (3x3, row-major; null: not wanted).
 double box_distance(const Obstacle& o, const double* x, double* n, double* hess);
 double sphere_distance(const Obstacle& o, const double* x, double* n, double* hess);
+// The disc: a vertical cylinder of radius o.radius and height 2 o.half[2]
+// about o.center (flat top and bottom, a round rim).
+double disc_distance(const Obstacle& o, const double* x, double* n, double* hess);
+// Whichever of the three the obstacle is; 1e300 (far) without one.
+double shape_distance(const Obstacle& o, const double* x, double* n, double* hess);
 
 // Penalty force on a particle at x. If jac_t_r is non-null, also adds
 // -(dF/dx)^T r to it (the contact part of the Newton cost's gradient).

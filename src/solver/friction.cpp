@@ -30,9 +30,7 @@ int holds_at(const Contact& c, const double* x1, Hold* h) {
     ++count;
   };
   double n[3];
-  if (o.shape == ObstacleShape::Box && c.friction > 0) hold(c.friction, box_distance(o, x1, n, nullptr), n);
-  if (o.shape == ObstacleShape::Sphere && c.friction > 0)
-    hold(c.friction, sphere_distance(o, x1, n, nullptr), n);
+  if (o.shape != ObstacleShape::None && c.friction > 0) hold(c.friction, shape_distance(o, x1, n, nullptr), n);
   if (o.floor) {
     const double up[3] = {0, 0, 1};
     hold(c.floor_friction, x1[2] - o.floor_z, up);

@@ -207,12 +207,13 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
 }
 
 // The step's energy slope along the Newton direction at the last evaluated
-// z: d . rho (a fixed-order sum, the same on every rank and thread count).
+// z: d . rho, both in the compact order (a fixed-order sum, the same on
+// every rank and thread count).
 double NewtonSolver::slope(const Evaluator& ev) {
   const double* rho = ev.residual().data();
   const double* d = d_.data();
   double g;
-  dots_.tile_sums<1>(c_.layout.tension(), [&](int64_t c, int64_t k, double* acc) { acc[0] += rho[k] * d[c]; }, &g);
+  dots_.compact_sums<1>(c_.layout.tension(), [&](int64_t c, double* acc) { acc[0] += rho[c] * d[c]; }, &g);
   return g;
 }
 

@@ -8,6 +8,15 @@ const char* to_string(ObstacleShape s) {
     case ObstacleShape::Box: return "box";
     case ObstacleShape::Sphere: return "sphere";
     case ObstacleShape::None: return "none";
+    case ObstacleShape::Disc: return "disc";
+  }
+  return "?";
+}
+
+const char* to_string(ClothShape s) {
+  switch (s) {
+    case ClothShape::Square: return "square";
+    case ClothShape::Disc: return "disc";
   }
   return "?";
 }

@@ -6,7 +6,11 @@
 
 namespace drape {
 
-enum class ObstacleShape { Box, Sphere, None };
+// Disc: a flat vertical cylinder (the Cusick drape tester's support disc).
+enum class ObstacleShape { Box, Sphere, None, Disc };
+// The specimen's outline: the whole grid, or the disc inscribed in it
+// (particles outside are removed, the Cusick test's circular specimen).
+enum class ClothShape { Square, Disc };
 enum class GradientMode { Analytic, Numeric };
 enum class Schedule { ActiveLists, Static, Dynamic, Guided };
 enum class SolverMethod { Newton, Cg };
@@ -24,6 +28,7 @@ struct ClothSpec {
   bool shear = true;                         // KES shear band on/off
   double height = 0.45;                      // m, z of the flat cloth at t = 0
   std::array<double, 2> center{0.0, 0.0};    // m, x-y of the cloth centre
+  ClothShape shape = ClothShape::Square;     // disc: only the particles within size/2 of the centre
   int clamp = 0;                             // rows i < clamp held fixed (a platform)
   // Slope of the force inside a KES band, as a multiple of the loading
   // curve's (Band::set_reversal), per kind of band. 0 is the band taken
@@ -41,10 +46,10 @@ struct ClothSpec {
 struct ObstacleSpec {
   ObstacleShape shape = ObstacleShape::Box;
   std::array<double, 3> center{0.0, 0.0, 0.2};  // m
-  std::array<double, 3> size{0.4, 0.4, 0.4};    // m, box edge lengths
-  double radius = 0.2;                          // m, sphere
+  std::array<double, 3> size{0.4, 0.4, 0.4};    // m, box edge lengths (disc: size[2] its thickness)
+  double radius = 0.2;                          // m, sphere or disc
   bool floor = true;                            // plane z = 0
-  double friction = 0;                          // Coulomb mu, cloth on the box or sphere
+  double friction = 0;                          // Coulomb mu, cloth on the box, sphere or disc
   double floor_friction = 0;                    // Coulomb mu, cloth on the floor
 };
 
@@ -134,6 +139,7 @@ struct Scene {
 };
 
 const char* to_string(ObstacleShape s);
+const char* to_string(ClothShape s);
 const char* to_string(GradientMode g);
 const char* to_string(Schedule s);
 const char* to_string(SolverMethod m);
