@@ -44,8 +44,7 @@ int main(int argc, char** argv) {
     build_active_lists(w.cloth, w.tiling, all, w.lists);
     w.loop->mesh_changed(true);
   }
-  Timers tm;
-  for (int k = 0; k < steps; ++k) w.loop->step(tm);
+  for (int k = 0; k < steps; ++k) w.step();
   MemoryTable t;
   add_memory(t, w.cloth);
   add_memory(t, w.lists);

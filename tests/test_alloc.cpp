@@ -44,11 +44,10 @@ void expect_no_allocation(bool slope_line_search) {
   };
   amrc.apply(w.cloth, w.fabric.density, s.cloth.shear);
   rebuild();
-  Timers tm;
   int changes = 0, iterations = 0;
   auto run = [&](int steps) {
     for (int k = 0; k < steps; ++k) {
-      iterations += w.loop->step(tm).iterations;
+      iterations += w.step().iterations;
       const AdaptStats a = amrc.adapt(w.cloth, w.fabric.density, s.cloth.shear, Thresholds{0.1, 0.02});
       if (a.refined + a.coarsened > 0) {
         rebuild();

@@ -37,11 +37,10 @@ Outcome run(int threads, Schedule schedule) {
   s.parallel.chunk = 2;
   omp_set_num_threads(threads);
   Simulation w(s, test_fabric());
-  Timers tm;
   Outcome out{};
   StepStats st;
   for (int k = 0; k < 6; ++k) {
-    st = w.loop->step(tm);
+    st = w.step();
     out.iterations += st.iterations;
   }
   out.cost = st.cost.total();

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "support/scenes.hpp"
@@ -17,7 +18,7 @@ constexpr double kTheta = 20 * M_PI / 180;  // tan = 0.364
 // A 5 x 5 cloth lying in the floor's contact layer, friction mu on the
 // floor, settled under upright gravity; a fixed step, so that positions are
 // samples of one trajectory.
-Simulation resting_cloth(double mu) {
+std::unique_ptr<Simulation> resting_cloth(double mu) {
   Scene s = flat_scene(5, 5, 0.04, 0.04);
   s.obstacle.floor = true;
   s.obstacle.floor_friction = mu;
@@ -26,9 +27,8 @@ Simulation resting_cloth(double mu) {
   s.solver.dt_max = 1e-3;
   s.solver.tolerance = 1e-12;
   s.solver.max_iterations = 1000;
-  Simulation w(s, test_fabric());
-  Timers tm;
-  for (int k = 0; k < 50; ++k) w.loop->step(tm);
+  auto w = std::make_unique<Simulation>(s, test_fabric());
+  w->advance(50);
   return w;
 }
 
@@ -56,13 +56,13 @@ double largest_slip(const Simulation& w, const std::vector<double>& x0) {
 // step: 100 steps leave it within 100 eps (0.1 mm), where without friction
 // it slides g sin(theta) t^2 / 2 = 17 mm.
 TEST(Friction, HoldsTheClothWhenMuExceedsTheSlope) {
-  Simulation w = resting_cloth(0.6);
+  const auto world = resting_cloth(0.6);
+  Simulation& w = *world;
   ASSERT_GT(0.6, std::tan(kTheta));
   const std::vector<double> x0(w.cloth.x(), w.cloth.x() + 3 * w.cloth.grid.n());
   tilt(w);
-  Timers tm;
   const int steps = 100;
-  for (int k = 0; k < steps; ++k) ASSERT_TRUE(w.loop->step(tm).converged) << "step " << k;
+  for (int k = 0; k < steps; ++k) ASSERT_TRUE(w.step().converged) << "step " << k;
   EXPECT_LT(largest_slip(w, x0), steps * w.model.contact.slip);
 }
 
@@ -71,12 +71,12 @@ TEST(Friction, HoldsTheClothWhenMuExceedsTheSlope) {
 // the change of its velocity (exact for a constant acceleration).
 TEST(Friction, SlidingClothAcceleratesAtGTimesSinMinusMuCos) {
   const double mu = 0.2;
-  Simulation w = resting_cloth(mu);
+  const auto world = resting_cloth(mu);
+  Simulation& w = *world;
   tilt(w);
-  Timers tm;
   std::vector<double> x, t;
   for (int k = 0; k <= 100; ++k) {
-    ASSERT_TRUE(w.loop->step(tm).converged) << "step " << k;
+    ASSERT_TRUE(w.step().converged) << "step " << k;
     x.push_back(mean_x(w));
     t.push_back(w.cloth.time);
   }
@@ -91,15 +91,16 @@ TEST(Friction, SlidingClothAcceleratesAtGTimesSinMinusMuCos) {
 // or sphere; the floor frictionless) runs the friction code at every
 // particle, adding nothing: the states are bit for bit those of mu = 0.
 TEST(Friction, NothingHeldLeavesTheStatesBitForBit) {
-  Simulation plain = resting_cloth(0.0);
-  Simulation held_by_nothing = resting_cloth(0.0);
+  const auto plain_world = resting_cloth(0.0);
+  Simulation& plain = *plain_world;
+  const auto held_by_nothing_world = resting_cloth(0.0);
+  Simulation& held_by_nothing = *held_by_nothing_world;
   held_by_nothing.model.contact.friction = 0.5;  // obstacle shape none: nothing to hold
   ASSERT_TRUE(held_by_nothing.model.contact.has_friction());
   const double start = mean_x(plain);
-  Timers tm;
   for (Simulation* w : {&plain, &held_by_nothing}) {
     tilt(*w);
-    for (int k = 0; k < 30; ++k) w->loop->step(tm);
+    w->advance(30);
   }
   EXPECT_GT(mean_x(plain) - start, 1e-4);  // it slid
   EXPECT_TRUE(plain.cloth.z == held_by_nothing.cloth.z);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <random>
 
 #include "amrc/criterion.hpp"
@@ -38,7 +39,7 @@ Quadtree amrc_tree() {
 
 // Random, well away from flat: positions jittered by 30% of h, forces drawn
 // over several band widths, a sphere and the floor touching some particles.
-Simulation random_world(unsigned seed, bool amrc = false) {
+std::unique_ptr<Simulation> random_world(unsigned seed, bool amrc = false) {
   Scene s = amrc ? flat_scene(13, 11, 0.12, 0.10) : flat_scene(7, 6, 0.06, 0.05);
   s.cloth.height = 0.004;
   s.cloth.bend_reversal = 5;  // the targets then move inside the bands
@@ -50,7 +51,8 @@ Simulation random_world(unsigned seed, bool amrc = false) {
   s.obstacle.radius = 0.025;
   s.obstacle.floor = true;
   s.solver.dt = 2e-3;
-  Simulation w(s, test_fabric());
+  auto world = std::make_unique<Simulation>(s, test_fabric());
+  Simulation& w = *world;
   if (amrc) w.set_tree(amrc_tree());
   w.cloth.flags[0] |= kFixed;  // a clamped corner: not an unknown
   w.rebuild();
@@ -75,7 +77,7 @@ Simulation random_world(unsigned seed, bool amrc = false) {
   EXPECT_GT(w.model.stretch[1].reversal(), 1.0);
   EXPECT_GT(w.model.shear.reversal(), 1.0);
   w.loop->evaluator().hysteresis_anchors(w.cloth.x1.data(), f1.data());
-  return w;
+  return world;
 }
 
 // Coulomb friction on the sphere and the floor, with a slip ramp as wide as
@@ -169,7 +171,8 @@ class GradientTerm : public ::testing::TestWithParam<Term> {};
 TEST_P(GradientTerm, AnalyticMatchesCentralDifferences) {
   const Term t = GetParam();
   for (unsigned seed : {1u, 2u, 3u}) {
-    Simulation w = random_world(seed, t.amrc);
+    const auto world = random_world(seed, t.amrc);
+    Simulation& w = *world;
     if (t.amrc) {
       ASSERT_GE(w.lists.hanging.size(), 4u) << "the AMRC mesh should have hanging particles";
     }
@@ -205,7 +208,8 @@ INSTANTIATE_TEST_SUITE_P(EachTerm, GradientTerm,
 // friction's 3x3 block, against central differences. Plain and AMRC mesh.
 TEST(Gradient, FrictionMatchesCentralDifferences) {
   for (bool amrc : {false, true}) {
-    Simulation w = random_world(5, amrc);
+    const auto world = random_world(5, amrc);
+    Simulation& w = *world;
     ASSERT_GT(with_friction(w), 0);
     w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
     std::vector<double> ga(w.cloth.z.size());
@@ -219,7 +223,8 @@ TEST(Gradient, FrictionMatchesCentralDifferences) {
 // beside its rim and off its round edge, with and without friction.
 TEST(Gradient, DiscObstacleMatchesCentralDifferences) {
   for (bool friction : {false, true}) {
-    Simulation w = random_world(6);
+    const auto world = random_world(6);
+    Simulation& w = *world;
     Obstacle& o = w.model.contact.obstacle;
     o.shape = ObstacleShape::Disc;
     o.center[0] = 0.002;
@@ -247,7 +252,8 @@ TEST(Gradient, DiscObstacleMatchesCentralDifferences) {
 }
 
 TEST(Gradient, NumericModeMatchesAnalytic) {
-  Simulation w = random_world(7);
+  const auto world = random_world(7);
+  Simulation& w = *world;
   std::vector<double> ga(w.cloth.z.size()), gn(w.cloth.z.size());
   const CostTerms ca = w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
   const CostTerms cn = w.loop->evaluator().numeric_gradient(w.cloth.z.data(), gn.data());
@@ -262,7 +268,8 @@ TEST(Gradient, NumericModeMatchesAnalytic) {
 }
 
 TEST(Gradient, NonUnknownsHaveZeroGradient) {
-  Simulation w = random_world(4);
+  const auto world = random_world(4);
+  Simulation& w = *world;
   std::vector<double> ga(w.cloth.z.size(), 1.0);
   w.loop->evaluator().evaluate(w.cloth.z.data(), ga.data());
   for (int k = 0; k < 3; ++k) EXPECT_EQ(ga[k], 0.0) << "fixed particle 0";
@@ -467,7 +474,8 @@ TEST(TripleLanes, InFoursVisitsEachItemOnce) {
 TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
   for (bool amrc : {false, true})
   for (bool friction : {false, true}) {
-    Simulation w = random_world(11, amrc);
+    const auto world = random_world(11, amrc);
+    Simulation& w = *world;
     if (friction) {
       ASSERT_GT(with_friction(w), 0);
     }
@@ -515,7 +523,8 @@ TEST(Stiffness, SymmetricPositiveDefiniteOnTheFreePositions) {
 TEST(Stiffness, AssembledMatchesTheProduct) {
   for (bool amrc : {false, true})
   for (bool friction : {false, true}) {
-    Simulation w = random_world(13, amrc);
+    const auto world = random_world(13, amrc);
+    Simulation& w = *world;
     if (friction) {
       ASSERT_GT(with_friction(w), 0);
     }
@@ -610,7 +619,10 @@ TEST(Stiffness, MatchesFiniteDifferencesOfTheResidual) {
 // old z agrees exactly).
 TEST(Stiffness, KeptGradientsFollowZ) {
   for (bool amrc : {false, true}) {
-    Simulation w = random_world(12, amrc), fresh = random_world(12, amrc);
+    const auto world = random_world(12, amrc);
+    Simulation& w = *world;
+    const auto fresh_world = random_world(12, amrc);
+    Simulation& fresh = *fresh_world;
     const size_t n = w.cloth.z.size();
     std::vector<double> v(n, 0.0), k1(n), k2(n), k3(n), diag(n);
     std::mt19937_64 rng(9);
@@ -649,7 +661,10 @@ TEST(Stiffness, KeptGradientsFollowZ) {
 // particles' contact ones) for an evaluator that never saw the old z.
 TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
   for (bool amrc : {false, true}) {
-    Simulation two = random_world(14, amrc), one = random_world(14, amrc);
+    const auto two_world = random_world(14, amrc);
+    Simulation& two = *two_world;
+    const auto one_world = random_world(14, amrc);
+    Simulation& one = *one_world;
     const size_t n = two.cloth.z.size();
     std::vector<double> v(n, 0.0);
     std::mt19937_64 rng(3);
@@ -700,7 +715,8 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
         x->cloth.z[3 * p + 2] += 2e-3 * x->cloth.grid.hi * (p % 7);
         x->cloth.z[3 * p] -= 1e-3 * x->cloth.grid.hi * (p % 3);
       }
-    Simulation fresh = random_world(14, amrc);
+    const auto fresh_world = random_world(14, amrc);
+    Simulation& fresh = *fresh_world;
     fresh.cloth.z = one.cloth.z;
     const Out moved = run(one, true);
     same(run(fresh, false), moved, ", z moved");
@@ -733,7 +749,8 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
 // only the lists' stamp tells). settled_cost comes right before the
 // diagonal: a diagonal first after a change must not read its numbers.
 TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
-  Simulation w = random_world(21, true);
+  const auto world = random_world(21, true);
+  Simulation& w = *world;
   Evaluator& ev = w.loop->evaluator();
   const size_t n = w.cloth.z.size();
   std::mt19937_64 rng(4);

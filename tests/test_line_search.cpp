@@ -109,10 +109,9 @@ Outcome drape(bool slope, int threads, int steps) {
   s.solver.slope_line_search = slope;
   omp_set_num_threads(threads);
   Simulation w(s, test_fabric());
-  Timers tm;
   Outcome out;
   for (int k = 0; k < steps; ++k) {
-    const StepStats st = w.loop->step(tm);
+    const StepStats st = w.step();
     out.newton += st.newton_iterations;
     out.evaluations += st.evaluations;
     out.unconverged += st.converged ? 0 : 1;

@@ -37,8 +37,7 @@ Held held_after_two_steps(SolverMethod method, int n) {
   Held h;
   {
     Simulation w(s, test_fabric());
-    Timers tm;
-    for (int k = 0; k < 2; ++k) w.loop->step(tm);
+    w.advance(2);
     MemoryTable t;
     add_memory(t, w.cloth);
     add_memory(t, w.lists);
@@ -108,8 +107,7 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
   s.cloth.particles = {129, 129};
   s.cloth.tile = 16;
   Simulation w(s, test_fabric());
-  Timers tm;
-  w.loop->step(tm);
+  w.step();
   const size_t finest = evaluator_bytes(w), finest_compact = compact_bytes(w);
   ASSERT_GT(finest_compact, 0u) << "the first step should have solved";
   Amrc amrc(w.cloth, 2);
@@ -119,7 +117,7 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
     amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, level);
     build_active_lists(w.cloth, w.tiling, all, w.lists);
     w.loop->mesh_changed(new_stage);
-    w.loop->step(tm);
+    w.step();
     return evaluator_bytes(w);
   };
   const size_t coarse = on_level(2, true);
@@ -142,8 +140,7 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
   s.cloth.particles = {129, 129};
   s.cloth.tile = 16;
   Simulation w(s, test_fabric());
-  Timers tm;
-  w.loop->step(tm);
+  w.step();
   const std::map<std::string, size_t> finest = list_sized_rows(*w.loop);
   Amrc amrc(w.cloth, 2);
   amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, 2);
@@ -151,7 +148,7 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
   for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
   build_active_lists(w.cloth, w.tiling, all, w.lists);
   w.loop->mesh_changed(true);
-  w.loop->step(tm);
+  w.step();
   int checked = 0;
   for (const auto& [name, bytes] : list_sized_rows(*w.loop)) {
     const size_t before = finest.at(name);
@@ -175,7 +172,6 @@ TEST(Memory, KeepingProductsAgainOnACoarserMesh) {
   s.cloth.tile = 8;
   s.cloth.height = 0.401;  // contact within a few steps: Newton solves
   Simulation kept(s, test_fabric()), toggled(s, test_fabric());
-  Timers tm;
   for (Simulation* w : {&kept, &toggled}) {
     Amrc amrc(w->cloth, 1);
     amrc.set_uniform_level(w->cloth, w->fabric.density, s.cloth.shear, 1);
@@ -183,14 +179,14 @@ TEST(Memory, KeepingProductsAgainOnACoarserMesh) {
     for (int t = 0; t < w->tiling.count(); ++t) all[t] = t;
     build_active_lists(w->cloth, w->tiling, all, w->lists);
     w->loop->mesh_changed(false);  // capacity: the finest mesh's
-    w->loop->step(tm);
+    w->step();
   }
   toggled.loop->evaluator().keep_products(false);
   toggled.loop->evaluator().keep_products(true);
   int solved = 0;
   for (int k = 0; k < 6; ++k) {
-    kept.loop->step(tm);
-    solved += toggled.loop->step(tm).iterations;
+    kept.step();
+    solved += toggled.step().iterations;
   }
   EXPECT_GT(solved, 0);
   ASSERT_EQ(kept.cloth.z.size(), toggled.cloth.z.size());
@@ -206,13 +202,12 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
   s.cloth.tile = 8;
   s.cloth.height = 0.401;  // contact within a few steps: Newton solves
   Simulation kept(s, test_fabric()), freed(s, test_fabric());
-  Timers tm;
   auto listed = [](Simulation& w) {
     MemoryTable t;
     w.loop->memory(t);
     return t.total();
   };
-  for (int k = 0; k < 2; ++k) kept.loop->step(tm), freed.loop->step(tm);
+  for (int k = 0; k < 2; ++k) kept.step(), freed.step();
   const size_t before = listed(freed);
   freed.loop->release_solvers();
   // Its eight vectors: two at z's positions, six compact (3 a row of the evaluator's).
@@ -221,8 +216,8 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
   EXPECT_EQ(before - listed(freed), newton);
   int solved = 0;
   for (int k = 0; k < 12; ++k) {
-    kept.loop->step(tm);
-    solved += freed.loop->step(tm).iterations;
+    kept.step();
+    solved += freed.step().iterations;
   }
   EXPECT_GT(solved, 0) << "the steps after the release should have solved";
   EXPECT_EQ(listed(freed), before);

@@ -102,9 +102,8 @@ TEST(FreeFall, FollowsGravity) {
   s.solver.max_iterations = 1000;
   Simulation w(s, test_fabric());
   const std::vector<double> x0(w.cloth.z.begin(), w.cloth.z.begin() + 3 * w.cloth.grid.n());
-  Timers tm;
   for (int k = 0; k < 20; ++k) {
-    const StepStats st = w.loop->step(tm);
+    const StepStats st = w.step();
     // No spurious internal force: the first guess already balances.
     EXPECT_LT(st.cost.total(), 1e-20) << "step " << st.step;
   }
@@ -128,10 +127,9 @@ TEST(FreeFall, DragGivesTheTerminalSpeed) {
   s.solver.drag = 25.0;
   s.obstacle.floor = false;
   Simulation w(s, test_fabric());
-  Timers tm;
-  double v = w.loop->step(tm).max_speed;  // the first step starts from a half-step velocity
+  double v = w.step().max_speed;  // the first step starts from a half-step velocity
   for (int k = 1; k < 200; ++k) {         // 0.4 s: ten time constants
-    const StepStats st = w.loop->step(tm);
+    const StepStats st = w.step();
     ASSERT_TRUE(st.converged) << "step " << st.step;
     const double want = (v + 9.80665 * 2e-3) / (1 + 25.0 * 2e-3);
     EXPECT_NEAR(st.max_speed, want, 1e-6 * want) << "step " << st.step;
@@ -153,14 +151,13 @@ TEST(Contact, NoParticleEndsInsideTheBox) {
   Scene s = small_drape();
   s.cloth.height = 0.1 + 0.0125 + 0.002;  // 2 mm above the contact margin: lands at once
   Simulation w(s, test_fabric());
-  Timers tm;
   const Obstacle& box = w.model.contact.obstacle;
   int touching = 0;
   // The contact layer alone keeps the cloth out: the safety net that puts a
   // particle back on the surface (StepStats::projections) must not have
   // fired, or it would hide a contact layer that let particles through.
   int64_t projections = 0;
-  for (int k = 0; k < 30; ++k) projections += w.loop->step(tm).projections;
+  for (int k = 0; k < 30; ++k) projections += w.step().projections;
   EXPECT_EQ(projections, 0) << "the safety net pushed particles out of the box";
   double n[3];
   for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
@@ -269,8 +266,7 @@ TEST(Shear, ADrapeOverABoxIsItsOwnMirrorImage) {
   Scene s = small_drape();
   s.cloth.height = 0.1 + 0.0125 + 0.002;
   Simulation w(s, test_fabric());
-  Timers tm;
-  while (w.cloth.time < 0.15) w.loop->step(tm);
+  while (w.cloth.time < 0.15) w.step();
   const Grid& g = w.cloth.grid;
   const double* x = w.cloth.x();
   double sag = 0, worst[2] = {0, 0};

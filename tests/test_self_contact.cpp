@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <random>
 
 #include "solver/multigrid/block_matrix.hpp"
@@ -88,10 +89,9 @@ Dropped drop(bool self_contact, int threads = 1, double end = 0.4, double gap_in
   s.solver.preconditioner = pre;
   Simulation w(s, test_fabric());
   fold(w, gap_in_h);
-  Timers tm;
   Dropped out{};
   int steps = 0;
-  while (w.cloth.time < end) out.all_converged &= w.loop->step(tm).converged, ++steps;
+  while (w.cloth.time < end) out.all_converged &= w.step().converged, ++steps;
   if (getenv("DRAPE_DEBUG_SELF"))
     printf("self %d: %d steps, %llu builds, %lld listed, t %.3f\n", int(self_contact), steps,
            (unsigned long long)w.loop->evaluator().self_contact().builds(),
@@ -139,8 +139,9 @@ TEST(SelfContact, SameBitsOnOneAndTwoThreads) {
 
 // A folded strip pressed together (the flap half a pair distance above the
 // lower half), jittered: pairs in contact on both sides of the ramp.
-Simulation pressed_world(unsigned seed) {
-  Simulation w(strip_scene(true), test_fabric());
+std::unique_ptr<Simulation> pressed_world(unsigned seed) {
+  auto world = std::make_unique<Simulation>(strip_scene(true), test_fabric());
+  Simulation& w = *world;
   fold(w, 0.5);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -148,7 +149,7 @@ Simulation pressed_world(unsigned seed) {
   w.model.dt = w.model.dt_prev = 1e-3;
   w.loop->freeze_bend_axes();
   w.loop->evaluator().hysteresis_forces(w.cloth.z.data());
-  return w;
+  return world;
 }
 
 int pairs_in_contact(const Simulation& w) {
@@ -167,7 +168,8 @@ int pairs_in_contact(const Simulation& w) {
 // position, relative to the largest entry.
 TEST(SelfContact, GradientMatchesCentralDifferences) {
   for (unsigned seed : {1u, 2u}) {
-    Simulation w = pressed_world(seed);
+    const auto world = pressed_world(seed);
+    Simulation& w = *world;
     Evaluator& ev = w.loop->evaluator();
     w.model.use_stretch = w.model.use_bend = w.model.use_shear = false;
     w.model.memory = 0;  // the memory term counts with its element's
@@ -196,7 +198,8 @@ TEST(SelfContact, GradientMatchesCentralDifferences) {
 // K assembled (multigrid's finest level) is the product's operator with
 // self-contact's blocks, and symmetric: partner columns included.
 TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
-  Simulation w = pressed_world(3);
+  const auto world = pressed_world(3);
+  Simulation& w = *world;
   Evaluator& ev = w.loop->evaluator();
   ev.settled_cost(w.cloth.z.data());
   ASSERT_GT(pairs_in_contact(w), 20);
@@ -205,7 +208,8 @@ TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
   const size_t n = w.cloth.z.size();
   const std::vector<int64_t>& ids = w.lists.particles.items;
   // The diagonal's self-contact share: the trace of each particle's block / 3.
-  Simulation plain = pressed_world(3);
+  const auto plain_world = pressed_world(3);
+  Simulation& plain = *plain_world;
   plain.model.self_contact = false;
   std::vector<double> dplain(n, 0.0);
   plain.loop->evaluator().settled_cost(plain.cloth.z.data());
@@ -219,7 +223,10 @@ TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
 // step's start and kept while particles move less than D/2, and one built
 // afresh at the current positions, give the same forces bit for bit.
 TEST(SelfContact, ForcesDoNotDependOnWhenTheListWasBuilt) {
-  Simulation w = pressed_world(4), fresh = pressed_world(4);
+  const auto world = pressed_world(4);
+  Simulation& w = *world;
+  const auto fresh_world = pressed_world(4);
+  Simulation& fresh = *fresh_world;
   Evaluator& ev = w.loop->evaluator();
   ev.evaluate(w.cloth.z.data(), nullptr);
   const uint64_t built = ev.self_contact().builds();

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <random>
 
 #include "amrc/amrc.hpp"
@@ -16,11 +17,11 @@ namespace drape::test {
 namespace {
 
 // 13 x 11 particles, on the finest mesh or on mixed_tree's leaves.
-Simulation mixed_world(bool amrc) {
-  Simulation w(flat_scene(13, 11, 0.12, 0.10), test_fabric());
+std::unique_ptr<Simulation> mixed_world(bool amrc) {
+  auto w = std::make_unique<Simulation>(flat_scene(13, 11, 0.12, 0.10), test_fabric());
   if (!amrc) return w;
-  w.set_tree(mixed_tree());
-  w.rebuild();
+  w->set_tree(mixed_tree());
+  w->rebuild();
   return w;
 }
 
@@ -34,7 +35,8 @@ int64_t leaf_count(const Simulation& w) {
 class ShearCells : public ::testing::TestWithParam<bool> {};
 
 TEST_P(ShearCells, AreTheLeavesAndTileTheCloth) {
-  const Simulation w = mixed_world(GetParam());
+  const auto world = mixed_world(GetParam());
+  const Simulation& w = *world;
   const Cloth& c = w.cloth;
   int64_t on = 0;
   double area = 0;
@@ -69,7 +71,8 @@ TEST_P(ShearCells, AreTheLeavesAndTileTheCloth) {
 // x += tan(gamma) y shears every corner of every cell by gamma exactly,
 // whatever the cell's size.
 TEST_P(ShearCells, AUniformShearReadsTheSameInEveryCell) {
-  Simulation w = mixed_world(GetParam());
+  const auto world = mixed_world(GetParam());
+  Simulation& w = *world;
   Cloth& c = w.cloth;
   const double gamma = 0.2;
   for (int64_t p = 0; p < c.grid.n(); ++p) c.z[3 * p] += std::tan(gamma) * c.z[3 * p + 1];
@@ -89,7 +92,8 @@ INSTANTIATE_TEST_SUITE_P(FinestAndAmrc, ShearCells, ::testing::Values(false, tru
 // hourglass of the per-particle cross), but every cell shears by
 // atan(2 delta / h), with the sign alternating along i.
 TEST(ShearCell, AnInPlaneZigzagShearsEveryCell) {
-  Simulation w = mixed_world(false);
+  const auto world = mixed_world(false);
+  Simulation& w = *world;
   Cloth& c = w.cloth;
   const double delta = 0.1 * c.grid.hi;
   for (int64_t p = 0; p < c.grid.n(); ++p) c.z[3 * p + 1] += c.grid.i_of(p) % 2 ? -delta : delta;

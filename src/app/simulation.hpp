@@ -49,9 +49,10 @@ class Simulation {
   // output directory.
   Simulation(const Scene& scene, const Fabric& fabric, const RunOptions& opt, MPI_Comm comm);
   ~Simulation();
-  // Only for returning a local from a function (the move is elided): the
-  // time loop refers to the members.
-  Simulation(Simulation&&) = default;
+  // Neither copied nor moved: the time loop refers to the members (the
+  // cloth, model, lists, tiling); a helper returns a std::unique_ptr.
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
 
   // The whole run: the first frame, steps to the end, the final state and
   // the report. Returns the exit status (0 also when a signal or the wall
@@ -81,6 +82,8 @@ class Simulation {
   void rebuild();
   // One rank: the mesh as tree t (same grid) from the next rebuild() on.
   void set_tree(const Quadtree& t);
+  // n >= 1 steps, each as step() takes it; the last one's record.
+  StepStats advance(int n);
   // The AMRC tree; none: the finest grid.
   const Quadtree* tree() const { return amrc ? &amrc->tree() : nullptr; }
   const Reducer& red() const;

@@ -100,6 +100,12 @@ StepStats Simulation::step() {
   return st;
 }
 
+StepStats Simulation::advance(int n) {
+  StepStats st = step();
+  for (int k = 1; k < n; ++k) st = step();
+  return st;
+}
+
 void Simulation::inject_faults() {
   if (poison_ != cloth.step + 1) return;
   if (poison_rank_ < 0) inject_nan(cloth, lists);

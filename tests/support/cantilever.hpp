@@ -44,9 +44,8 @@ inline Cantilever run_cantilever(int intervals, double dt, int max_steps, double
   wld.rebuild();
   Cantilever out;
   out.overhang = l;
-  Timers tm;
   for (int k = 0; k < max_steps; ++k) {
-    out.last = wld.loop->step(tm);
+    out.last = wld.step();
     out.steps = k + 1;
     if (out.last.max_speed * dt < 1e-9 * l && k > 5) break;  // moved less than 1e-9 l
   }
