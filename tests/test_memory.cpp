@@ -4,17 +4,25 @@
 #include <gtest/gtest.h>
 #include <malloc.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <string>
 
 #include "amrc/amrc.hpp"
+#include "amrc/criterion.hpp"
+#include "amrc/remesh.hpp"
 #include "solver/memory_table.hpp"
 #include "support/memory_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace drape::test {
 namespace {
+
+int64_t own_size(const ActiveLists& l, int kind) {
+  const ActiveList* own[3] = {&l.edges, &l.triples, &l.shears};
+  return own[kind]->size();
+}
 
 // Bytes malloc has handed out and not taken back (arena and mmap'd blocks).
 size_t heap_in_use() {
@@ -223,6 +231,77 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
   EXPECT_EQ(listed(freed), before);
   ASSERT_EQ(kept.cloth.z.size(), freed.cloth.z.size());
   EXPECT_EQ(0, std::memcmp(kept.cloth.z.data(), freed.cloth.z.data(), kept.cloth.z.size() * sizeof(double)));
+}
+
+
+// The rows find their elements by walking the lists beside the particles
+// (no map by slot): every slot a particle gathers gets the position a plain
+// search of its tile's part of the list (or of the ring) gives, -1 where
+// there is none, whatever order the particles come in: list order (the
+// walk's), backwards, and the hanging particles' order. On an AMRC mesh
+// with coarse leaves, every other tile owned and the rest as the ring.
+TEST(Evaluator, ListWalkFindsWhatASearchFinds) {
+  Scene s;
+  s.cloth.particles = {23, 19};
+  s.cloth.size = {0.3, 0.25};
+  s.cloth.tile = 5;
+  Simulation w(s, test_fabric());
+  Quadtree tree(23, 19, 2);
+  const std::vector<double> flat(23 * 19, 0.0);
+  for (int pass = 0; pass < 4; ++pass) adapt(tree, flat, 1.0, 0.5);
+  tree.refine(tree.leaf_at(9, 5));
+  w.set_tree(tree);
+  w.rebuild();
+  std::vector<int> owned;
+  for (int t = 0; t < w.tiling.count(); t += 2) owned.push_back(t);
+  std::vector<int64_t> ring;
+  for (int64_t p = 0; p < w.cloth.grid.n(); ++p)
+    if (w.tiling.tile_of(p) % 2 == 1) ring.push_back(p);
+  ActiveLists lists;
+  build_active_lists(w.cloth, w.tiling, owned, lists, ring);
+  hanging_links(*w.tree(), lists.hanging);
+  const Cloth& c = w.cloth;
+  auto search = [&](int kind, int64_t s) -> int64_t {
+    const ActiveList* own[3] = {&lists.edges, &lists.triples, &lists.shears};
+    const ActiveList* rl[3] = {&lists.ring_edges, &lists.ring_triples, &lists.ring_shears};
+    const auto& o = own[kind]->items;
+    const auto& r = rl[kind]->items;
+    if (auto f = std::find(o.begin(), o.end(), s); f != o.end()) return f - o.begin();
+    if (auto f = std::find(r.begin(), r.end(), s); f != r.end()) return int64_t(o.size()) + (f - r.begin());
+    return -1;
+  };
+  int found = 0, ringed = 0, missing = 0, wrong = 0;
+  auto check = [&](ListWalk& walk, int64_t p) {
+    auto ask = [&](int place, int kind, int64_t s) {
+      const int64_t want = search(kind, s), got = walk.position(place, kind, s);
+      wrong += got != want;
+      found += want >= 0;
+      ringed += want >= own_size(lists, kind);
+      missing += want < 0;
+    };
+    for (int d = 0; d < 2; ++d) {
+      const int64_t pv = c.prev[d][p], nx = c.next[d][p];
+      ask(5 * d, 0, 2 * p + d);
+      if (pv >= 0) ask(5 * d + 1, 0, 2 * pv + d);
+      if (nx >= 0) ask(5 * d + 2, 1, 2 * nx + d);
+      ask(5 * d + 3, 1, 2 * p + d);
+      if (pv >= 0) ask(5 * d + 4, 1, 2 * pv + d);
+    }
+    ask(10, 2, p);
+    for (int k = 0; k < 3; ++k)
+      if (c.corner_of[k][p] >= 0) ask(11 + k, 2, c.corner_of[k][p]);
+  };
+  const auto& pl = lists.particles.items;
+  ListWalk forward(lists, w.tiling), backward(lists, w.tiling), hanging(lists, w.tiling);
+  for (int64_t p : pl) check(forward, p);
+  for (auto p = pl.rbegin(); p != pl.rend(); ++p) check(backward, *p);
+  for (const HangingLink& h : lists.hanging) check(hanging, h.h);
+  std::printf("slots asked for: %d found (%d in the ring), %d in no list\n", found, ringed, missing);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(found, 400) << "the test does not test";
+  EXPECT_GT(ringed, 40) << "no slot in the ring";
+  EXPECT_GT(missing, 40) << "no slot in no list";
+  EXPECT_GT(lists.hanging.size(), 0u) << "no hanging particles";
 }
 
 }  // namespace

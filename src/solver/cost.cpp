@@ -121,8 +121,9 @@ void Evaluator::memory(MemoryTable& t) const {
 // ---- the element buffers in list order -----------------------------------
 
 // The lists hold their slots in ascending order within each owned tile
-// (lists_.tiles ascending) and along the ring: binary searches find a slot,
-// where a map by slot would be sized by the grid on every rank.
+// (lists_.tiles ascending) and along the ring: a binary search finds one
+// slot (a row's slots: ListWalk), where a map by slot would be sized by the
+// grid on every rank.
 int64_t Evaluator::position_of(int kind, int64_t s) const {
   const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
   const ActiveList* ring[3] = {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears};
@@ -145,11 +146,16 @@ int64_t Evaluator::position_of(int kind, int64_t s) const {
 }
 
 bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
+  ListWalk walk(lists_, tiling_);
+  return listed_row(p, row, walk);
+}
+
+bool Evaluator::listed_row(int64_t p, GatherRow& row, ListWalk& walk) const {
   std::fill(row.at, row.at + 16, -1);
   static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
   bool listed = true;
   for_gathered(p, [&](int place, int kind, int64_t s, int part) {
-    const int64_t pos = position_of(kind, s);
+    const int64_t pos = walk.position(place, kind, s);
     if (pos >= 0)
       row.at[place] = int32_t(width[kind] * pos + 3 * part);
     else
@@ -204,11 +210,17 @@ void Evaluator::build_rows() {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
   });
   const ActiveList& pl = lists_.particles;
+  // Each thread walks the lists beside its run of the particle list.
   int unlisted = 0;
-#pragma omp parallel for schedule(static) reduction(+ : unlisted)
-  for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k]);
+#pragma omp parallel reduction(+ : unlisted)
+  {
+    ListWalk walk(lists_, tiling_);
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < pl.size(); ++k) unlisted += !listed_row(pl.items[k], rows_[k], walk);
+  }
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
-  for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i]);
+  ListWalk walk(lists_, tiling_);
+  for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i], walk);
 }
 
 // A warp triple bends about the weft tangent, a weft triple about minus the

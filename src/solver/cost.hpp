@@ -20,6 +20,7 @@
 #include "mesh/cloth.hpp"
 #include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
+#include "solver/list_walk.hpp"
 #include "solver/loops.hpp"
 #include "solver/memory_table.hpp"
 #include "solver/model.hpp"
@@ -252,6 +253,8 @@ class Evaluator {
   // this rank's tiles, whose result, like any entry this rank does not own,
   // is not meaningful and reaches no owned entry.
   bool listed_row(int64_t p, GatherRow& row) const;
+  // The same, the slots found by `walk` (the particles in list order: fast).
+  bool listed_row(int64_t p, GatherRow& row, ListWalk& walk) const;
   GatherRow row_of(int64_t p) const {
     GatherRow r;
     listed_row(p, r);
@@ -341,8 +344,9 @@ class Evaluator {
   // position in the particle list), then each hanging particle's
   // (hanging_row), for rows_stamp_'s lists and rows_hanging_ hanging
   // particles. Sized by the lists (fit_arrays): on several ranks, or on a
-  // coarse mesh, they hold this rank's elements only. No map by slot: a
-  // slot's position is searched for in its list (position_of).
+  // coarse mesh, they hold this rank's elements only. No map by slot: the
+  // rows' slots are found by walking the lists (ListWalk), any other's by a
+  // search in its list (position_of).
   std::vector<GatherRow> rows_;
   // Slot s of kind (0 edge, 1 triple, 2 cell): its position, -1 in no list.
   int64_t position_of(int kind, int64_t s) const;
