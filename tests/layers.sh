@@ -3,8 +3,9 @@
 # include its own headers and those of the layers below it, never one above:
 #   base -> mesh -> solver -> amrc -> decomp -> io -> app
 # and mpi.h appears only in decomp, app and io's parallel-HDF5 writers. Each
-# layer is a library linking only the ones below; since all headers share
-# one include root, this check is what fails an include that runs back up.
+# layer is a library linking only the ones below and compiling against an
+# include root that holds only those layers' folders (src/CMakeLists.txt), so
+# the build fails such an include too; this check reads the sources alone.
 # Usage: layers.sh SRC_DIR
 set -euo pipefail
 src=$1

@@ -10,13 +10,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "io/config.hpp"
+#include "io/scene_schema.hpp"
 #include "base/error.hpp"
 #include "solver/scene.hpp"
 #include "support/files.hpp"
@@ -40,111 +40,17 @@ std::string write_scene(const std::string& text, const std::string& tag = "") {
   return p.string();
 }
 
-// Bitwise equality, so -0.0 vs 0.0 and the last ulp count.
-bool same(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-
-template <size_t N>
-bool same(const std::array<double, N>& a, const std::array<double, N>& b) {
-  for (size_t i = 0; i < N; ++i)
-    if (!same(a[i], b[i])) return false;
-  return true;
-}
-
-// The fields where a and b differ, by their TOML keys (every field of the
-// Scene, one by one; Config.EveryFieldIsCompared checks that none is missed).
+// The keys whose values differ in a and b, bit for bit (-0.0 is not 0.0):
+// each key's declaration compares its member (Config.EveryKeyReachesItsMember
+// checks that every key's member is its own).
 std::vector<std::string> differences(const Scene& a, const Scene& b) {
   std::vector<std::string> d;
-  const auto differ = [&](bool equal, const char* key) {
-    if (!equal) d.push_back(key);
-  };
-  differ(a.name == b.name, "name");
-  const auto &ac = a.cloth, &bc = b.cloth;
-  differ(ac.particles == bc.particles, "cloth.particles");
-  differ(same(ac.size, bc.size), "cloth.size");
-  differ(ac.fabric == bc.fabric, "cloth.fabric");
-  differ(ac.tile == bc.tile, "cloth.tile");
-  differ(ac.shear == bc.shear, "cloth.shear");
-  differ(ac.clamp == bc.clamp, "cloth.clamp");
-  differ(same(ac.bend_reversal, bc.bend_reversal), "cloth.bend_reversal");
-  differ(same(ac.shear_reversal, bc.shear_reversal), "cloth.shear_reversal");
-  differ(same(ac.stretch_reversal, bc.stretch_reversal), "cloth.stretch_reversal");
-  differ(same(ac.compression, bc.compression), "cloth.compression");
-  differ(same(ac.height, bc.height), "cloth.height");
-  differ(same(ac.center, bc.center), "cloth.center");
-  differ(ac.shape == bc.shape, "cloth.shape");
-  const auto &ao = a.obstacle, &bo = b.obstacle;
-  differ(ao.shape == bo.shape, "obstacle.shape");
-  differ(same(ao.center, bo.center), "obstacle.center");
-  differ(same(ao.size, bo.size), "obstacle.size");
-  differ(same(ao.radius, bo.radius), "obstacle.radius");
-  differ(ao.floor == bo.floor, "obstacle.floor");
-  differ(same(ao.friction, bo.friction), "obstacle.friction");
-  differ(same(ao.floor_friction, bo.floor_friction), "obstacle.floor_friction");
-  const auto &av = a.solver, &bv = b.solver;
-  differ(same(av.dt, bv.dt), "solver.dt");
-  differ(same(av.dt_min, bv.dt_min), "solver.dt_min");
-  differ(same(av.dt_max, bv.dt_max), "solver.dt_max");
-  differ(av.steps == bv.steps, "solver.steps");
-  differ(av.max_iterations == bv.max_iterations, "solver.max_iterations");
-  differ(same(av.tolerance, bv.tolerance), "solver.tolerance");
-  differ(av.gradient == bv.gradient, "solver.gradient");
-  differ(av.method == bv.method, "solver.method");
-  differ(av.preconditioner == bv.preconditioner, "solver.preconditioner");
-  differ(av.newton_target == bv.newton_target, "solver.newton_target");
-  differ(av.slope_line_search == bv.slope_line_search, "solver.slope_line_search");
-  differ(same(av.damping, bv.damping), "solver.damping");
-  differ(same(av.rest_speed, bv.rest_speed), "solver.rest_speed");
-  differ(same(av.contact_thickness, bv.contact_thickness), "solver.contact_thickness");
-  differ(av.self_contact == bv.self_contact, "solver.self_contact");
-  differ(same(av.memory, bv.memory), "solver.memory");
-  differ(same(av.drag, bv.drag), "solver.drag");
-  differ(same(av.wall_limit, bv.wall_limit), "solver.wall_limit");
-  differ(same(av.end_time, bv.end_time), "solver.end_time");
-  differ(a.output.every == b.output.every, "output.every");
-  differ(a.output.picture == b.output.picture, "output.picture");
-  differ(a.output.checkpoint_every == b.output.checkpoint_every, "output.checkpoint_every");
-  const auto &ap = a.parallel, &bp = b.parallel;
-  differ(ap.schedule == bp.schedule, "parallel.schedule");
-  differ(ap.chunk == bp.chunk, "parallel.chunk");
-  differ(ap.threads == bp.threads, "parallel.threads");
-  differ(same(ap.imbalance, bp.imbalance), "parallel.imbalance");
-  const auto &aa = a.amrc, &ba = b.amrc;
-  differ(aa.enabled == ba.enabled, "amrc.enabled");
-  differ(aa.max_level == ba.max_level, "amrc.max_level");
-  differ(same(aa.refine, ba.refine), "amrc.refine");
-  differ(same(aa.coarsen, ba.coarsen), "amrc.coarsen");
-  differ(aa.every == ba.every, "amrc.every");
-  differ(same(aa.coarsen_speed, ba.coarsen_speed), "amrc.coarsen_speed");
-  differ(aa.indicator == ba.indicator, "amrc.indicator");
-  differ(same(aa.start_spacing, ba.start_spacing), "amrc.start_spacing");
-  differ(same(aa.stage_drag, ba.stage_drag), "amrc.stage_drag");
+  for (const drape::Parameter& p : drape::scene_parameters().all())
+    if (!p.same(a, b)) d.push_back(p.full_name());
   return d;
 }
 
 void expect_same(const Scene& a, const Scene& b) { EXPECT_EQ(differences(a, b), std::vector<std::string>{}); }
-
-// The keys a scene file sets ("section.key", top-level keys bare), in order
-// of appearance; read line by line, as both box.toml and scene_to_toml's
-// text put one key on a line.
-std::vector<std::string> keys_of(const std::string& text) {
-  std::vector<std::string> keys;
-  std::istringstream in(text);
-  std::string line, section;
-  while (std::getline(in, line)) {
-    const size_t at = line.find_first_not_of(" \t");
-    if (at == std::string::npos || line[at] == '#') continue;
-    if (line[at] == '[') {
-      section = line.substr(at + 1, line.find(']') - at - 1);
-      continue;
-    }
-    const size_t eq = line.find('=');
-    if (eq == std::string::npos) continue;
-    std::string key = line.substr(at, eq - at);
-    key.erase(key.find_last_not_of(" \t") + 1);
-    keys.push_back(section.empty() ? key : section + "." + key);
-  }
-  return keys;
-}
 
 std::vector<fs::path> example_scenes() {
   std::vector<fs::path> v;
@@ -197,93 +103,43 @@ TEST(Config, DefaultSceneIsSceneDefaults) {
   EXPECT_EQ(s.obstacle.shape, drape::ObstacleShape::Box);
 }
 
-// box.toml spells out the default scene: every key, each at its default.
+// box.toml spells out the default scene: each key it sets is at its default.
+// It need not set every key (a curated, commented file); `drape --dry-run` and
+// docs/configuration.md list them all.
 TEST(Config, BoxSceneFileIsTheDefault) {
   const auto box = fs::path(DRAPE_SOURCE_DIR) / "run" / "scenes" / "box.toml";
   expect_same(drape::load_scene(box.string(), {}), Scene{});
-  std::ifstream in(box);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::vector<std::string> spelled = keys_of(text), all = keys_of(drape::scene_to_toml(Scene{}));
-  std::sort(spelled.begin(), spelled.end());
-  std::sort(all.begin(), all.end());
-  std::vector<std::string> missing, extra;
-  std::set_difference(all.begin(), all.end(), spelled.begin(), spelled.end(), std::back_inserter(missing));
-  std::set_difference(spelled.begin(), spelled.end(), all.begin(), all.end(), std::back_inserter(extra));
-  EXPECT_EQ(missing, std::vector<std::string>{}) << "keys box.toml leaves out";
-  EXPECT_EQ(extra, std::vector<std::string>{}) << "keys box.toml sets twice or the scene does not know";
 }
 
-// differences() sees every field: each key set away from its default is
-// the one difference found, and every key the printer knows is tried.
-TEST(Config, EveryFieldIsCompared) {
-  const std::pair<const char*, const char*> changed[] = {
-      {"name", "\"other\""},
-      {"cloth.particles", "[999, 1000]"},
-      {"cloth.size", "[1.0, 0.9]"},
-      {"cloth.fabric", "\"other-fabric\""},
-      {"cloth.tile", "40"},
-      {"cloth.shear", "false"},
-      {"cloth.clamp", "1"},
-      {"cloth.bend_reversal", "4.0"},
-      {"cloth.shear_reversal", "4.0"},
-      {"cloth.stretch_reversal", "4.0"},
-      {"cloth.compression", "0.2"},
-      {"cloth.height", "0.5"},
-      {"cloth.center", "[0.1, 0.0]"},
-      {"cloth.shape", "\"disc\""},
-      {"obstacle.shape", "\"sphere\""},
-      {"obstacle.center", "[0.0, 0.0, 0.3]"},
-      {"obstacle.size", "[0.4, 0.4, 0.3]"},
-      {"obstacle.radius", "0.3"},
-      {"obstacle.floor", "false"},
-      {"obstacle.friction", "0.3"},
-      {"obstacle.floor_friction", "0.5"},
-      {"solver.dt", "0.002"},
-      {"solver.dt_min", "2e-05"},
-      {"solver.dt_max", "0.005"},
-      {"solver.steps", "10"},
-      {"solver.max_iterations", "100"},
-      {"solver.tolerance", "1e-07"},
-      {"solver.gradient", "\"numeric\""},
-      {"solver.method", "\"cg\""},
-      {"solver.preconditioner", "\"multigrid\""},
-      {"solver.newton_target", "8"},
-      {"solver.slope_line_search", "true"},
-      {"solver.damping", "0.1"},
-      {"solver.rest_speed", "0.02"},
-      {"solver.contact_thickness", "0.001"},
-      {"solver.self_contact", "true"},
-      {"solver.memory", "0.5"},
-      {"solver.drag", "1.0"},
-      {"solver.wall_limit", "60.0"},
-      {"solver.end_time", "1.0"},
-      {"output.every", "10"},
-      {"output.picture", "false"},
-      {"output.checkpoint_every", "5"},
-      {"parallel.schedule", "\"static\""},
-      {"parallel.chunk", "8"},
-      {"parallel.threads", "2"},
-      {"parallel.imbalance", "1.2"},
-      {"amrc.enabled", "true"},
-      {"amrc.max_level", "2"},
-      {"amrc.refine", "0.2"},
-      {"amrc.coarsen", "0.01"},
-      {"amrc.every", "5"},
-      {"amrc.coarsen_speed", "0.05"},
-      {"amrc.indicator", "\"deflection\""},
-      {"amrc.start_spacing", "0.0"},
-      {"amrc.stage_drag", "5.0"},
-  };
-  std::vector<std::string> tried;
-  for (const auto& [key, value] : changed) {
-    const Scene s = drape::load_scene(std::nullopt, {std::string(key) + "=" + value});
-    EXPECT_EQ(differences(s, Scene{}), std::vector<std::string>{key}) << key << " = " << value;
-    tried.push_back(key);
+// Each key's example value, set alone, changes that key and no other: the
+// key is read into its own member (two keys bound to one member would both
+// differ), and the example is not the default.
+TEST(Config, EveryKeyReachesItsMember) {
+  const auto& all = drape::scene_parameters().all();
+  ASSERT_GE(all.size(), 50u);
+  for (const drape::Parameter& p : all) {
+    SCOPED_TRACE(p.full_name());
+    ASSERT_FALSE(p.example.empty()) << "no example value declared";
+    Scene s;
+    try {
+      s = drape::load_scene(std::nullopt, {p.full_name() + "=" + p.example_toml()});
+    } catch (const InputError& e) {
+      ADD_FAILURE() << "example " << p.example << " refused: " << e.what();
+      continue;
+    }
+    EXPECT_EQ(differences(s, Scene{}), std::vector<std::string>{p.full_name()}) << "example " << p.example;
   }
-  std::vector<std::string> all = keys_of(drape::scene_to_toml(Scene{}));
-  std::sort(tried.begin(), tried.end());
-  std::sort(all.begin(), all.end());
-  EXPECT_EQ(tried, all) << "a key with no changed value above";
+}
+
+// differences() is bitwise: a sign of zero and the last ulp count.
+TEST(Config, DifferencesAreBitwise) {
+  Scene a, b;
+  b.cloth.height = std::nextafter(a.cloth.height, 1.0);
+  EXPECT_EQ(differences(a, b), std::vector<std::string>{"cloth.height"});
+  a.cloth.center = {0.0, 0.0};
+  b = a;
+  b.cloth.center = {-0.0, 0.0};
+  EXPECT_EQ(differences(a, b), std::vector<std::string>{"cloth.center"});
 }
 
 TEST(Config, ExampleScenesLoad) {

@@ -48,6 +48,8 @@ std::string Parameter::refusal(const ParameterValue& v) const {
   return bound.ok ? bound.refusal(numbers(v), value_text(v)) : "";
 }
 
+std::string Parameter::example_toml() const { return kind == ParameterKind::String ? quote(example) : example; }
+
 std::string value_text(const ParameterValue& v) { return std::visit(Text{}, v); }
 
 const Parameter* ParameterList::find(const std::string& full_name) const {

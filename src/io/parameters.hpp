@@ -4,6 +4,7 @@
 // range checks, --dry-run's text and the configuration reference all walk
 // the same declarations, so they cannot drift apart.
 #include <array>
+#include <cstring>
 #include <functional>
 #include <initializer_list>
 #include <string>
@@ -36,16 +37,29 @@ struct Parameter {
   std::vector<std::string> choices;  // an enumeration's names; empty otherwise
   std::string comment;  // after the value in --dry-run's text
   std::string doc;      // the reference's meaning column
+  std::string example;  // a value other than the default that passes the checks
   std::function<ParameterValue(const Scene&)> get;
   std::function<void(Scene&, const ParameterValue&)> set;
+  // Whether two scenes hold the same value here, bit for bit (-0.0 is not 0.0).
+  std::function<bool(const Scene&, const Scene&)> same;
 
   std::string full_name() const { return section.empty() ? key : section + "." + key; }
+  // The example as a TOML value: a string (an enumeration's too) quoted.
+  std::string example_toml() const;
   // "must be > 0, got -1", or "" when `v` is allowed.
   std::string refusal(const ParameterValue& v) const;
 };
 
 // The value as TOML text: 1.0, [3, 3], "box".
 std::string value_text(const ParameterValue& v);
+
+// Bit for bit for numbers and arrays of them (so -0.0 and the last ulp
+// count), == for strings.
+template <class T>
+bool same_bits(const T& a, const T& b) {
+  if constexpr (std::is_trivially_copyable_v<T>) return std::memcmp(&a, &b, sizeof a) == 0;
+  else return a == b;
+}
 
 template <class T>
 constexpr ParameterKind kind_of() {
@@ -77,6 +91,11 @@ class SectionParameters {
   SectionParameters& add(const char* key, E S::*field, std::initializer_list<E> all, const char* comment,
                          const char* doc);
 
+  // The key just added: a value other than its default, as TOML text (a
+  // string unquoted), which the tests set to see that the key reaches its
+  // member and no other.
+  SectionParameters& example(const char* text);
+
  private:
   static const S& in(const Scene& s, S Scene::*part) {
     if constexpr (std::is_same_v<S, Scene>) return s; else return s.*part;
@@ -86,7 +105,7 @@ class SectionParameters {
   }
   Parameter make(const char* key, ParameterKind kind, const char* unit, Bound bound, const char* comment,
                  const char* doc) const {
-    return Parameter{name_, key, kind, unit, std::move(bound), {}, comment, doc, {}, {}};
+    return Parameter{name_, key, kind, unit, std::move(bound), {}, comment, doc, {}, {}, {}, {}};
   }
 
   ParameterList& list_;
@@ -103,6 +122,7 @@ class ParameterList {
     return {*this, name, part};
   }
   void push(Parameter p) { params_.push_back(std::move(p)); }
+  Parameter& back() { return params_.back(); }
 
   const std::vector<Parameter>& all() const { return params_; }
   const std::vector<std::string>& sections() const { return sections_; }
@@ -121,6 +141,9 @@ SectionParameters<S>& SectionParameters<S>::add(const char* key, T S::*field, co
   const auto part = part_;
   p.get = [part, field](const Scene& s) { return ParameterValue(in(s, part).*field); };
   p.set = [part, field](Scene& s, const ParameterValue& v) { in(s, part).*field = std::get<T>(v); };
+  p.same = [part, field](const Scene& a, const Scene& b) {
+    return same_bits(in(a, part).*field, in(b, part).*field);
+  };
   list_.push(std::move(p));
   return *this;
 }
@@ -138,7 +161,14 @@ SectionParameters<S>& SectionParameters<S>::add(const char* key, E S::*field, st
     for (E e : values)
       if (std::get<std::string>(v) == to_string(e)) in(s, part).*field = e;
   };
+  p.same = [part, field](const Scene& a, const Scene& b) { return in(a, part).*field == in(b, part).*field; };
   list_.push(std::move(p));
+  return *this;
+}
+
+template <class S>
+SectionParameters<S>& SectionParameters<S>::example(const char* text) {
+  list_.back().example = text;
   return *this;
 }
 
