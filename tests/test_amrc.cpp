@@ -559,14 +559,15 @@ TEST(GridSequence, StartLevelFromTheSpacing) {
   EXPECT_EQ(level(17, 1.0, 10.0), 1);    // 16 intervals: 8 per side at level 1, no further
 }
 
-// The next finer mesh's wall time: 4 times the last stage's at least, more
-// when the last refinement grew the time more (the default run: 23 s on
-// level 5, 99 s on level 4, so the 127 x 127 mesh needs over 4.3 x 99 s).
+// The next finer mesh's wall time: 8 times the last stage's at least (4
+// times the particles, twice the iterations), more when the last refinement
+// grew the time more. The default run: 22 s on level 5, 88 s on level 4
+// (4.0x), 430 s left, and the 127 x 127 mesh still moving after 426 s.
 TEST(GridSequence, NextStageGrowsAsTheLastRefinementDid) {
-  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 0), 40);    // the first stage: particles alone
-  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 5), 40);    // grew 2x: still 4 times the particles
-  EXPECT_DOUBLE_EQ(next_stage_seconds(99, 23), 99 * (99 / 23.0));
-  EXPECT_GT(next_stage_seconds(99, 23), 418);         // what the default run had left
+  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 0), 80);    // the first stage: particles and iterations
+  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 5), 80);    // grew 2x: still the floor
+  EXPECT_DOUBLE_EQ(next_stage_seconds(99, 9), 99 * 11.0);  // grew 11x: that growth again
+  EXPECT_GT(next_stage_seconds(87.6, 21.9), 430);     // what the default run had left
 }
 
 

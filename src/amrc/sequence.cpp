@@ -17,7 +17,7 @@ int sequence_start_level(const Grid& g, double spacing) {
 
 double next_stage_seconds(double last, double before) {
   const double growth = before > 0 ? last / before : 0;
-  return last * std::max(4.0, growth);
+  return last * std::max(8.0, growth);
 }
 
 namespace {
