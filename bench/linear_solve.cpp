@@ -23,7 +23,14 @@
 namespace drape {
 namespace {
 
-const char* name(Interpolation ip) { return ip == Interpolation::Smoothed ? "smoothed" : "bilinear"; }
+const char* name(Interpolation ip) {
+  return ip == Interpolation::Smoothed ? "smoothed" : ip == Interpolation::Fitted ? "fitted" : "bilinear";
+}
+
+// The fitted interpolation's settings (--fit-*), and whether only the
+// bilinear and fitted P are compared (--fitted).
+MultigridSettings fit_settings;
+bool fitted_only = false;
 
 struct Variant {
   std::string name;
@@ -94,6 +101,76 @@ void worst_mode(Simulation& w, const BlockMatrix& K, const std::vector<int64_t>&
               rough[1][1] / (4 * total[1]), rough[1][2] / (4 * total[2]));
 }
 
+// How well the finest level's interpolation, bilinear and fitted (to 8 test
+// vectors), reproduces test vectors from their values on the coarse points:
+// |v - P v_c| / |v| over the 8 and for a 9th held out, the vectors relaxed by
+// the smoother (A e = 0, Chebyshev of degree fit_sweeps) or by 5 bilinear
+// V-cycles; and how low their energy is (v^T K v / v^T D v).
+void fit_diagnostic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n) {
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const std::vector<int64_t> coarse = coarse_points(ids, n, n, 1);
+  const Prolongation P0 = make_prolongation(ids, coarse, n, n, 1, scratch);
+  Prolongation P = fitted_pattern(ids, coarse, n, n, 1, fit_settings.fit_wide, scratch);
+  for (size_t k = 0; k < ids.size(); ++k) scratch[ids[k]] = int32_t(k);
+  std::vector<int64_t> fine_row;
+  for (int64_t p : coarse) fine_row.push_back(scratch[p]);
+  const int64_t m = 3 * K.rows;
+  const int count = 8;
+  for (int source = 0; source < 2; ++source) {
+    std::vector<double> v, zero, kv(static_cast<size_t>(m)), c(static_cast<size_t>(m));
+    random_vectors(K.rows, count + 1, v);
+    Chebyshev cheb;
+    cheb.setup(K, fit_settings.fit_sweeps, fit_settings.fit_ratio);
+    if (source == 0) {
+      relax_vectors(K, cheb, count + 1, v, zero);
+    } else {
+      Multigrid mg{MultigridSettings{}};
+      mg.setup(K, ids, n, n, 1);
+      for (int t = 0; t <= count; ++t)
+        for (int it = 0; it < 5; ++it) {
+          double* e = &v[size_t(t) * m];
+          K.multiply(e, kv.data());
+          mg.apply(kv.data(), c.data());
+          for (int64_t i = 0; i < m; ++i) e[i] -= c[i];
+        }
+    }
+    fit_prolongation(K, P0, fine_row, count, v, fit_settings.fit_tikhonov, fit_settings.fit_keep_sums,
+                     fit_settings.fit_full_blocks, P);
+    double err[2][2] = {}, rq = 0, share = 0;  // err: [P0, P][fitted set, held out]
+    std::vector<double> vc;
+    for (int t = 0; t <= count; ++t) {
+      const double* x = &v[size_t(t) * m];
+      std::vector<double> one(x, x + m);
+      inject_vectors(fine_row, K.rows, 1, one, vc);
+      double vv = 0, vkv = 0, vdv = 0;
+      K.multiply(x, kv.data());
+      for (int64_t i = 0; i < m; ++i) {
+        vv += x[i] * x[i];
+        vkv += x[i] * kv[i];
+      }
+      for (int64_t r = 0; r < K.rows; ++r) {
+        const double* d = K.block(r, int32_t(r));
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) vdv += x[3 * r + a] * d[3 * a + b] * x[3 * r + b];
+      }
+      rq += vkv / vdv / (count + 1);
+      double cc = 0;
+      for (double q : vc) cc += q * q;
+      share += cc / vv * double(K.rows) / double(coarse.size()) / (count + 1);
+      for (int which = 0; which < 2; ++which) {
+        std::fill(c.begin(), c.end(), 0.0);
+        prolong_add(which ? P : P0, vc.data(), c.data());
+        double ee = 0;
+        for (int64_t i = 0; i < m; ++i) ee += (x[i] - c[i]) * (x[i] - c[i]);
+        err[which][t == count] += t == count ? std::sqrt(ee / vv) : std::sqrt(ee / vv) / count;
+      }
+    }
+    std::printf("test vectors by %s: v^T K v / v^T D v %.2e; mean square on the coarse points / overall %.2f; "
+                "|v - P v_c| / |v| bilinear %.3f (held out %.3f), fitted %.3f (held out %.3f)\n",
+                source ? "5 bilinear V-cycles" : "the smoother", rq, share, err[0][0], err[0][1], err[1][0], err[1][1]);
+  }
+}
+
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
 void kernel_times(Simulation& w, bool modes) {
@@ -112,6 +189,7 @@ void kernel_times(Simulation& w, bool modes) {
   std::vector<double> r(3 * ids.size()), x(3 * ids.size());
   for (size_t k = 0; k < r.size(); ++k) r[k] = std::cos(double(k));
   const double matvec = per_call([&] { K.multiply(r.data(), x.data()); });
+  if (fitted_only) fit_diagnostic(K, ids, n);
   if (modes) {
     // How far below D^-1 A's top the smoother's 12-step power estimate is,
     // level by level (3000 steps taken as the truth).
@@ -146,12 +224,17 @@ void kernel_times(Simulation& w, bool modes) {
     line.smoothing = Smoothing::Line;
     worst_mode(w, K, ids, n, point, "point smoothing");
     worst_mode(w, K, ids, n, line, "line smoothing");
+    MultigridSettings fitted = fit_settings;
+    fitted.interpolation = Interpolation::Fitted;
+    worst_mode(w, K, ids, n, fitted, "fitted P");
   }
   std::printf("stiffness product %.3f ms; K assembled %.2f products, K x %.2f products (%lld blocks)\n",
               1e3 * product, assemble / product, matvec / product, (long long)K.blocks());
-  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed})
+  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed, Interpolation::Fitted})
     for (int degree : {1, 2, 3}) {
-      MultigridSettings ms{degree, 10.0, 100};
+      if ((fitted_only || ip == Interpolation::Fitted) && degree > 1) continue;
+      if (fitted_only && ip == Interpolation::Smoothed) continue;
+      MultigridSettings ms = ip == Interpolation::Fitted ? fit_settings : MultigridSettings{degree, 10.0, 100};
       ms.interpolation = ip;
       Multigrid mg(ms);
       mg.setup(K, ids, n, n, 1);
@@ -164,7 +247,7 @@ void kernel_times(Simulation& w, bool modes) {
           std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s\n",
                       (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds);
     }
-  {
+  if (!fitted_only) {
     MultigridSettings ms;
     ms.smoothing = Smoothing::Line;
     Multigrid mg(ms);
@@ -192,14 +275,17 @@ void kernel_times(Simulation& w, bool modes) {
                              {"multigrid line", Preconditioner::Multigrid, Interpolation::Bilinear, 0, Smoothing::Line},
                              {"multigrid smoothed (finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 1},
                              {"multigrid smoothed (2 finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 2},
-                             {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000}};
+                             {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000},
+                             {"multigrid fitted", Preconditioner::Multigrid, Interpolation::Fitted, 1000}};
   for (const OneSolve& o : solves) {
+    const bool fit = o.ip == Interpolation::Fitted;
+    if (fitted_only && !fit && std::string(o.name) != "multigrid bilinear") continue;
     SolverSpec spec = w.scene.solver;
     spec.preconditioner = o.pc;
     TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red(), spec);
-    MultigridSettings ms;
+    MultigridSettings ms = fit ? fit_settings : MultigridSettings{};
     ms.interpolation = o.ip;
-    ms.smoothed_levels = o.smoothed_levels;
+    if (!fit) ms.smoothed_levels = o.smoothed_levels;
     ms.smoothing = o.sm;
     loop.newton().set_multigrid(ms);
     Timers t;
@@ -227,11 +313,24 @@ int run(int argc, char** argv) {
   app.add_option("--steps", steps, "steps compared (0: the kernels and one solve only)")->check(CLI::Range(0, 100000));
   app.add_option("--threads", threads, "OpenMP threads")->check(CLI::Range(1, 1024));
   app.add_option("--out", out, "JSON file");
+  app.add_flag("--fitted", fitted_only, "compare the bilinear and the fitted P only");
+  app.add_option("--fit-vectors", fit_settings.fit_vectors, "fitted P: test vectors")->check(CLI::Range(1, 64));
+  app.add_option("--fit-sweeps", fit_settings.fit_sweeps, "fitted P: degree of their relaxation")->check(CLI::Range(1, 1000));
+  app.add_option("--fit-ratio", fit_settings.fit_ratio, "fitted P: the relaxation damps [lmax / ratio, lmax]");
+  app.add_option("--fit-cycles", fit_settings.fit_cycles, "fitted P: vectors relaxed by bilinear V-cycles (finest P only)");
+  app.add_option("--fit-levels", fit_settings.smoothed_levels, "fitted P: on this many finest levels");
+  app.add_option("--fit-tikhonov", fit_settings.fit_tikhonov, "fitted P: pull towards the bilinear weights");
+  bool wide = false, free_sums = false;
+  app.add_flag("--fit-full-blocks", fit_settings.fit_full_blocks, "fitted P: full 3 x 3 blocks (else diagonal)");
+  app.add_flag("--fit-free-sums", free_sums, "fitted P: rows need not keep the bilinear row sums");
+  app.add_flag("--fit-wide", wide, "fitted P: 6 coarse neighbours where P0 has 2 (else P0's)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  fit_settings.fit_wide = wide;
+  fit_settings.fit_keep_sums = !free_sums;
   omp_set_num_threads(threads);
   const Scene scene = landing_scene(n, dt);
   Simulation w(scene, load_fabric(scene.cloth.fabric));
