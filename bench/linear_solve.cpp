@@ -5,6 +5,11 @@
 // are reported side by side (ratios from one run).
 // Kernel timings are the calling thread's CPU seconds (one thread by default).
 //   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--sweep] [--modes] [--out FILE.json]
+//     [--fitted [--fit-vectors 8] [--fit-sweeps 30] [--fit-ratio 30] [--fit-cycles 0] [--fit-levels N]
+//      [--fit-tikhonov 1e-3] [--fit-wide] [--fit-free-sums] [--fit-full-blocks] [--two-grid 1] [--two-grid-cubic]]
+// --fitted: the bilinear against the fitted P only, with how well each
+// interpolates the test vectors; --two-grid, --two-grid-cubic: two-grid
+// cycles on the finest level with richer coarse spaces (experiments).
 #include <omp.h>
 
 #include <ctime>
@@ -14,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +37,8 @@ const char* name(Interpolation ip) {
 // bilinear and fitted P are compared (--fitted).
 MultigridSettings fit_settings;
 bool fitted_only = false;
+int two = 0;
+bool cubic = false;
 
 struct Variant {
   std::string name;
@@ -171,6 +179,181 @@ void fit_diagnostic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n
   }
 }
 
+// Preconditioned CG on A x = b from 0 to |r| <= 1e-8 |b|: the iterations.
+int pcg(const BlockMatrix& A, const std::vector<double>& b, const std::function<void(const double*, double*)>& M) {
+  const size_t n = b.size();
+  std::vector<double> x(n, 0.0), r = b, z(n), p(n), ap(n);
+  auto dot = [&](const std::vector<double>& u, const std::vector<double>& v) {
+    double d = 0;
+    for (size_t k = 0; k < n; ++k) d += u[k] * v[k];
+    return d;
+  };
+  const double target = 1e-16 * dot(b, b);
+  M(r.data(), z.data());
+  p = z;
+  double rz = dot(r, z);
+  for (int it = 1; it <= 5000; ++it) {
+    A.multiply(p.data(), ap.data());
+    const double a = rz / dot(p, ap);
+    for (size_t k = 0; k < n; ++k) {
+      x[k] += a * p[k];
+      r[k] -= a * ap[k];
+    }
+    if (dot(r, r) <= target) return it;
+    M(r.data(), z.data());
+    const double rz1 = dot(r, z);
+    for (size_t k = 0; k < n; ++k) p[k] = z[k] + rz1 / rz * p[k];
+    rz = rz1;
+  }
+  return 5000;
+}
+
+// Two functions per coarse node (adaptive smoothed aggregation's way of
+// adding near-null vectors, Brezina et al. 2004), as a two-grid experiment
+// on the finest level: P = [P0 | T P0], T_f = the 3 x 3 block [t1 t2 t3] at
+// fine point f of three vectors left by 5 bilinear V-cycles, so that the
+// coarse space holds each t_k (times any bilinear envelope) besides P0's
+// fields. PCG iterations with the two-grid cycle (point Chebyshev, Galerkin
+// coarse operator solved exactly) with P0 alone and with P, against the
+// V-cycle: whether a richer coarse space would flatten the count.
+void two_functions(const BlockMatrix& K, const std::vector<int64_t>& ids, int n, int sets) {
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const std::vector<int64_t> coarse = coarse_points(ids, n, n, 1);
+  const Prolongation P0 = make_prolongation(ids, coarse, n, n, 1, scratch);
+  const int64_t m = 3 * K.rows, nc = int64_t(coarse.size());
+  std::vector<double> t, kv(static_cast<size_t>(m)), c(static_cast<size_t>(m));
+  random_vectors(K.rows, 3 * sets, t);
+  Multigrid vc{MultigridSettings{}};
+  vc.setup(K, ids, n, n, 1);
+  for (int k = 0; k < 3 * sets; ++k)
+    for (int it = 0; it < 5; ++it) {
+      double* e = &t[size_t(k) * m];
+      K.multiply(e, kv.data());
+      vc.apply(kv.data(), c.data());
+      for (int64_t i = 0; i < m; ++i) e[i] -= c[i];
+    }
+  Prolongation P;
+  P.P.rows = K.rows;
+  P.P.start.assign(size_t(K.rows) + 1, 0);
+  for (int64_t f = 0; f < K.rows; ++f) {
+    for (int set = 0; set <= sets; ++set)
+      for (int64_t q = P0.P.start[f]; q < P0.P.start[f + 1]; ++q) {
+        const double w = P0.P.val[9 * q];
+        P.P.col.push_back(int32_t(P0.P.col[q] + set * nc));
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            P.P.val.push_back(set ? w * t[size_t(3 * (set - 1) + j) * m + 3 * f + i] : (i == j ? w : 0.0));
+      }
+    P.P.start[f + 1] = int64_t(P.P.col.size());
+  }
+  transpose(P.P, (sets + 1) * nc, P.T);
+  std::vector<double> b(static_cast<size_t>(m));
+  for (int64_t k = 0; k < m; ++k) b[k] = std::cos(double(k));
+  Chebyshev smoother;
+  smoother.setup(K, 1, 10);
+  for (int rich = 0; rich < 2; ++rich) {
+    const Prolongation& Q = rich ? P : P0;
+    BlockMatrix AP, Ac;
+    galerkin(K, Q, AP, Ac, true);
+    CoarseSolve solve;
+    solve.factor(Ac, true);
+    std::vector<double> r(static_cast<size_t>(m)), bc(3 * size_t(Q.coarse())), xc(bc.size());
+    const int its = pcg(K, b, [&](const double* rhs, double* x) {
+      smoother.smooth(K, rhs, x, true);
+      K.residual(rhs, x, r.data());
+      restrict_to(Q, r.data(), bc.data());
+      solve.solve(bc.data(), xc.data());
+      prolong_add(Q, xc.data(), x);
+      smoother.smooth(K, rhs, x, false);
+    });
+    std::printf("two-grid, P0%s: %d iterations (coarse: %lld nodes, %lld blocks)\n",
+                rich ? (" and " + std::to_string(3 * sets) + " V-cycle vectors per coarse point").c_str() : "", its,
+                (long long)Q.coarse(), (long long)Ac.blocks());
+  }
+  std::printf("V-cycle, bilinear: %d iterations\n", pcg(K, b, [&](const double* rhs, double* x) { vc.apply(rhs, x); }));
+}
+
+// Cubic (Lagrange, 4 coarse lines where there are 4, else 3 or 2) in place
+// of linear interpolation along each grid direction, on the finest level:
+// where K is of fourth order (the hanging sides' bending across the weak
+// direction), bilinear P and R = P^T are of too low an order for the
+// Galerkin coarse operator (orders of P and R summing to more than the
+// operator's are needed), cubic ones are not. Two-grid PCG as above.
+Prolongation cubic_prolongation(const std::vector<int64_t>& fine, const std::vector<int64_t>& coarse, int n) {
+  std::vector<int32_t> at(size_t(n) * n, -1);
+  for (size_t k = 0; k < coarse.size(); ++k) at[coarse[k]] = int32_t(k);
+  auto on = [&](int i) { return i % 2 == 0 || i == n - 1; };
+  auto weights = [&](int i, std::vector<std::pair<int, double>>& out) {
+    out.clear();
+    if (on(i)) {
+      out.emplace_back(i, 1.0);
+      return;
+    }
+    std::vector<int> x;
+    if (i - 3 >= 0) x.push_back(i - 3);
+    x.push_back(i - 1);
+    x.push_back(i + 1);
+    if (i + 1 < n - 1) x.push_back(std::min(i + 3, n - 1));
+    for (size_t a = 0; a < x.size(); ++a) {
+      double w = 1;
+      for (size_t b = 0; b < x.size(); ++b)
+        if (b != a) w *= double(i - x[b]) / double(x[a] - x[b]);
+      out.emplace_back(x[a], w);
+    }
+  };
+  Prolongation P;
+  P.P.rows = int64_t(fine.size());
+  P.P.start.assign(fine.size() + 1, 0);
+  std::vector<std::pair<int, double>> wi, wj;
+  for (size_t f = 0; f < fine.size(); ++f) {
+    weights(int(fine[f] / n), wi);
+    weights(int(fine[f] % n), wj);
+    std::vector<std::pair<int32_t, double>> row;
+    for (const auto& [a, u] : wi)
+      for (const auto& [b, v] : wj)
+        if (at[size_t(a) * n + b] >= 0) row.emplace_back(at[size_t(a) * n + b], u * v);
+    std::sort(row.begin(), row.end());
+    for (const auto& [c, w] : row) {
+      P.P.col.push_back(c);
+      const double blk[9] = {w, 0, 0, 0, w, 0, 0, 0, w};
+      P.P.val.insert(P.P.val.end(), blk, blk + 9);
+    }
+    P.P.start[f + 1] = int64_t(P.P.col.size());
+  }
+  transpose(P.P, int64_t(coarse.size()), P.T);
+  return P;
+}
+
+void two_grid_cubic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n) {
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const std::vector<int64_t> coarse = coarse_points(ids, n, n, 1);
+  const Prolongation P0 = make_prolongation(ids, coarse, n, n, 1, scratch);
+  const Prolongation P3 = cubic_prolongation(ids, coarse, n);
+  const int64_t m = 3 * K.rows;
+  std::vector<double> b(static_cast<size_t>(m));
+  for (int64_t k = 0; k < m; ++k) b[k] = std::cos(double(k));
+  Chebyshev smoother;
+  smoother.setup(K, 1, 10);
+  for (int cubic = 0; cubic < 2; ++cubic) {
+    const Prolongation& Q = cubic ? P3 : P0;
+    BlockMatrix AP, Ac;
+    galerkin(K, Q, AP, Ac, true);
+    CoarseSolve solve;
+    solve.factor(Ac, true);
+    std::vector<double> r(static_cast<size_t>(m)), bc(3 * size_t(Q.coarse())), xc(bc.size());
+    const int its = pcg(K, b, [&](const double* rhs, double* x) {
+      smoother.smooth(K, rhs, x, true);
+      K.residual(rhs, x, r.data());
+      restrict_to(Q, r.data(), bc.data());
+      solve.solve(bc.data(), xc.data());
+      prolong_add(Q, xc.data(), x);
+      smoother.smooth(K, rhs, x, false);
+    });
+    std::printf("two-grid, %s P: %d iterations (coarse blocks %lld)\n", cubic ? "cubic" : "bilinear", its,
+                (long long)Ac.blocks());
+  }
+}
+
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
 void kernel_times(Simulation& w, bool modes) {
@@ -190,6 +373,8 @@ void kernel_times(Simulation& w, bool modes) {
   for (size_t k = 0; k < r.size(); ++k) r[k] = std::cos(double(k));
   const double matvec = per_call([&] { K.multiply(r.data(), x.data()); });
   if (fitted_only) fit_diagnostic(K, ids, n);
+  if (fitted_only && two > 0) two_functions(K, ids, n, two);
+  if (fitted_only && cubic) two_grid_cubic(K, ids, n);
   if (modes) {
     // How far below D^-1 A's top the smoother's 12-step power estimate is,
     // level by level (3000 steps taken as the truth).
@@ -314,6 +499,9 @@ int run(int argc, char** argv) {
   app.add_option("--threads", threads, "OpenMP threads")->check(CLI::Range(1, 1024));
   app.add_option("--out", out, "JSON file");
   app.add_flag("--fitted", fitted_only, "compare the bilinear and the fitted P only");
+  app.add_option("--two-grid", two, "with --fitted: two-grid cycles with P0, and P0 plus 3 x this many vectors per coarse point")
+      ->check(CLI::Range(0, 4));
+  app.add_flag("--two-grid-cubic", cubic, "with --fitted: two-grid cycles with bilinear and cubic P");
   app.add_option("--fit-vectors", fit_settings.fit_vectors, "fitted P: test vectors")->check(CLI::Range(1, 64));
   app.add_option("--fit-sweeps", fit_settings.fit_sweeps, "fitted P: degree of their relaxation")->check(CLI::Range(1, 1000));
   app.add_option("--fit-ratio", fit_settings.fit_ratio, "fitted P: the relaxation damps [lmax / ratio, lmax]");
