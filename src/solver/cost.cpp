@@ -75,6 +75,9 @@ void Evaluator::fit_arrays(bool exact) {
   fit_keeping(anc_e_, ne, me, exact, 0.0);
   fit_keeping(anc_t_, nt, mt, exact, 0.0);
   fit_keeping(anc_s_, ns, ms, exact, 0.0);
+  active_.fit(0, ne, me, exact);
+  active_.fit(1, nt, mt, exact);
+  active_.fit(2, ns, ms, exact);
 }
 
 void Evaluator::fit_to_lists(bool exact) {
@@ -109,6 +112,7 @@ void Evaluator::memory(MemoryTable& t) const {
   t.add(o, "neighbours in list order", (nb_e_.capacity() + nb_t_.capacity() + nb_s_.capacity()) * sizeof(int32_t));
   t.add(o, "bending axes", axis_t_);
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
+  if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
   t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
   t.add(o, "assembly maps",
         (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
@@ -291,6 +295,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
+  active_.note(0, pos, L / L0 - 1.0, bv, st);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
   if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
@@ -346,6 +351,7 @@ void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], con
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
+  active_.note(1, pos, th / Lm, bv, st);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
   if (settle && keep_) kept_gradients(w * st.df_dq / Lm, g, 3, &kg_t_[kKgTriple * pos]);
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
@@ -368,6 +374,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const double A = c_.shear_area[s];
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
+  active_.note(2, pos, phi, bv, st);
   const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
   if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);

@@ -18,6 +18,7 @@
 
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
+#include "solver/band_active_set.hpp"
 #include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
 #include "solver/list_walk.hpp"
@@ -115,6 +116,15 @@ class Evaluator {
   // product computes them again, the same numbers (bench_gradient's
   // BM_KeptProducts times both). Allocates: call it before the time loop.
   void keep_products(bool on);
+  // Newton through the bands' kinks (band_active_set.hpp): on, every
+  // evaluation notes each band element's strain, force and branch.
+  // Allocates: call it before the time loop.
+  void track_branches(bool on);
+  BandActiveSet& branches() { return active_; }
+  // Right after settled_cost at z: each element that changed branch at the
+  // last trial gets its secant as K's band slope; how many did (this rank's,
+  // the ring's included).
+  int64_t kink_tangents();
   // Its diagonal, at the same entries. Also freezes each element's band
   // slope (and each edge's tension) at z for stiffness_product, so that a
   // product evaluates no band, power law or angle: those cost more than the
@@ -358,6 +368,7 @@ class Evaluator {
   std::vector<double> axis_t_;
   // Each element's band anchor (hysteresis_anchors), in list order too.
   std::vector<double> anc_e_, anc_t_, anc_s_;
+  BandActiveSet active_;  // the elements' branches (off unless track_branches)
   uint64_t derived_stamp_ = 0;  // the lists the axes and anchors were laid out for
   void triple_ids(int64_t s, int64_t pos, int64_t ids[3]) const {
     ids[0] = nb_t_[2 * pos];

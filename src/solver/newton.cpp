@@ -217,12 +217,12 @@ double NewtonSolver::slope(const Evaluator& ev) {
   return g;
 }
 
-// SlopeSearch's trials from a = 1: true with z at the accepted one (its cost
-// in res.cost and c0). False when its trials ran out or the direction does
+// SlopeSearch's trials from a = 1 (g0: the slope at z): true with z at the
+// accepted one (its cost in res.cost and c0). False when its trials ran out or the direction does
 // not descend; z is then at some trial, and the caller backtracks.
 template <class Trial>
-bool NewtonSolver::slope_search(Evaluator& ev, Trial&& trial, CgResult& res, double& c0) {
-  SlopeSearch search(slope(ev));
+bool NewtonSolver::slope_search(Evaluator& ev, double g0, Trial&& trial, CgResult& res, double& c0) {
+  SlopeSearch search(g0);
   if (!search.usable()) return false;
   double a = 1.0;
   for (int t = 0; t < SlopeSearch::kTrials && a > 0; ++t) {
@@ -240,10 +240,50 @@ bool NewtonSolver::slope_search(Evaluator& ev, Trial&& trial, CgResult& res, dou
   return false;
 }
 
+// The active-set rounds (BandActiveSet): the full step is tried; while its
+// slope is not within SlopeSearch::kAccept of the slope at z (it over- or
+// undershoots, the bands' kinks crossed on the wrong tangent), z is
+// evaluated again, the elements that landed on another branch take their
+// secant stiffness, and the step is solved again, at most kKinkRounds times.
+// Global decisions from fixed-order sums only (the slopes): every rank takes
+// the same rounds. Returns the slope at z along the final direction; the
+// line search follows, its first trial (a = 1) the last round's, kept.
+template <class Trial>
+double NewtonSolver::through_kinks(Evaluator& ev, double* z, double g0, Trial&& trial, double& last_a,
+                                   CgResult& res, const CgSettings& st, double eta, Timers& tm) {
+  constexpr int kKinkRounds = 2;
+  const int64_t end = c_.layout.tension();
+  double* zt = r_.data();
+  ev.branches().next_iteration();
+  for (int round = 0; round < kKinkRounds && res.iterations < st.max_iterations; ++round) {
+    trial(1.0);
+    if (std::fabs(slope(ev)) <= SlopeSearch::kAccept * std::fabs(g0)) break;
+    // Back to z: its residual and kept numbers, then the landed branches' slopes.
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c]; });
+    ev.branches().at_z();
+    {
+      ScopedPhase ph(tm, kLineSearch);
+      ++res.evaluations;
+      ev.settled_cost(z);
+      last_a = -1;  // the kept trial is not where the evaluator is
+    }
+    ev.kink_tangents();
+    const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
+    res.iterations += std::max(1, used);
+    // The solve used the positions' save as its residual: z holds them.
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
+    g0 = slope(ev);
+  }
+  return g0;
+}
+
 CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
                                 const std::function<void(int, double)>& on_iteration) {
   const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
   CgResult res;
+  // Branches noted at z's slot first (BandActiveSet), the trials' beside them.
+  const bool kinks = st.active_set && ev.branches().enabled();
+  if (kinks) ev.branches().at_z();
   {
     ScopedPhase ph(tm, kGradient);
     res.cost = ev.settled_cost(z);
@@ -277,13 +317,23 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // free particles' positions are saved and restored (a whole-array copy
     // would cost the finest mesh's price on a coarse one).
     dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
+    double g0 = kinks || st.slope_search ? slope(ev) : 0.0;
+    // The last trial's step and cost: the active-set rounds' last full step
+    // is the line search's first trial (z and the evaluator still there).
+    double last_a = -1;
+    CostTerms last;
     auto trial = [&](double a) {
+      if (a == last_a) return last;
       ScopedPhase ph(tm, kLineSearch);
       dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c] + a * scale * d_[c]; });
       ++res.evaluations;
-      return ev.settled_cost(z);
+      if (kinks) ev.branches().at_trial();
+      last = ev.settled_cost(z);
+      last_a = a;
+      return last;
     };
-    bool accepted = st.slope_search && slope_search(ev, trial, res, c0);
+    if (kinks) g0 = through_kinks(ev, z, g0, trial, last_a, res, st, eta, tm);
+    bool accepted = st.slope_search && slope_search(ev, g0, trial, res, c0);
     for (double a = 1.0; !accepted && a > 1e-4; a *= 0.5) {
       const CostTerms t = trial(a);
       if (std::isfinite(t.total()) && t.total() < c0) {
@@ -292,6 +342,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
         accepted = true;
       }
     }
+    if (accepted && kinks) ev.branches().accept_trial();  // the last trial evaluated
     if (!accepted) {
       // Back to where the line search began; z's residual buffers with it.
       dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c]; });

@@ -6,7 +6,9 @@
 // condition number of K, not its square as for CG on a least-squares cost
 // (docs/design.md §6). The line search: backtracking on the cost, each
 // accepted step a decrease, or (CgSettings::slope_search) regula falsi on the
-// step's energy slope along the direction (solver/slope_search.hpp).
+// step's energy slope along the direction (solver/slope_search.hpp); before
+// either, optionally, a re-solve with the tangent of the band branches the
+// full step lands on (solver/band_active_set.hpp).
 #include <functional>
 #include <vector>
 
@@ -55,7 +57,10 @@ class NewtonSolver {
   void setup_multigrid(Evaluator& ev);
   double slope(const Evaluator& ev);
   template <class Trial>
-  bool slope_search(Evaluator& ev, Trial&& trial, CgResult& res, double& c0);
+  bool slope_search(Evaluator& ev, double g0, Trial&& trial, CgResult& res, double& c0);
+  template <class Trial>
+  double through_kinks(Evaluator& ev, double* z, double g0, Trial&& trial, double& last_a, CgResult& res,
+                       const CgSettings& st, double eta, Timers& tm);
   bool multigrid_stale(const Evaluator& ev) const;
 
   const Cloth& c_;
