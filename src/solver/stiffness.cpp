@@ -139,10 +139,10 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   // for bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
   auto edge = [&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1, q = nb_e_[pos];
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (fill) {
+      const int64_t p = s >> 1, q = nb_e_[pos];
       const V e = at(z, q) - at(z, p);
       edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / c_.edge_rest[s],
                 c_.edge_width[s], ke);
@@ -151,12 +151,14 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     edge_product(ke, at(v, lo_e_[2 * pos + 1]) - at(v, lo_e_[2 * pos]), out);
     for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], out[k]);
   };
+  // The grid ids (z's) only where the z-only numbers are computed: the
+  // operand's reads go through the own numbering's tables.
   auto triple = [&](int64_t s, int64_t pos) {
-    int64_t ids[3];
-    triple_ids(s, pos, ids);
     double mine[kKgTriple];
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (fill) {
+      int64_t ids[3];
+      triple_ids(s, pos, ids);
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
       kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, 3, kg);
@@ -170,9 +172,9 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   auto shear = [&](int64_t s, int64_t pos) {
     double mine[kKgCell];
     double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
-    int64_t ids[4];
-    cell_ids(s, pos, ids);
     if (fill) {
+      int64_t ids[4];
+      cell_ids(s, pos, ids);
       const CellAt a = cell_at(ids, z);
       V g[4];
       shear_cell<double, false>(a.x, g);
