@@ -104,10 +104,9 @@ class Evaluator {
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
-  // left out so that K stays positive definite). Written at the free
-  // particles' positions (hanging ones': 0) only, the entries Newton's
-  // vectors stand for (Minimizer::for_each_unknown numbers them; the linear
-  // solve copies them into its compact vectors).
+  // left out so that K stays positive definite). v and K v laid out like
+  // z's positions (tests, tools; Newton calls stiffness_product_local
+  // below): written at the free particles' positions (hanging ones': 0).
   // Needs stiffness_diagonal at the same z and lists first (Newton's linear
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
@@ -131,7 +130,8 @@ class Evaluator {
   // calls, with no vector of the grid's size. Results at the free
   // particles' entries (hanging ones': 0, or 1 on the diagonal); v's
   // hanging and ghost entries are written (interpolated, received), its
-  // other entries not free here must hold 0. The two above go through these.
+  // other entries not free here must hold 0. The two above go through
+  // these (allocating: not for a step).
   void stiffness_product_local(const double* z, double* v, double* kv);
   void stiffness_diagonal_local(const double* z, double* diag);
   // The numbering for the present lists (held from the first call of this
