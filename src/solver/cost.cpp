@@ -246,14 +246,21 @@ void Evaluator::use_local() {
 }
 
 // The own numbering: the free and hanging particles, then every other
-// particle an element, a hanging link or the halo's receives touch (found
-// where the first search gives -1), then the tables of local indices. The
-// tables are filled in parallel, each entry by its own element.
+// particle an element or a hanging link touches (found where the first
+// search gives -1); then the elements', hanging links' and halo's tables.
 void Evaluator::build_local(bool exact) {
   local_stamp_ = lists_.stamp;
   local_hanging_ = lists_.hanging.size();
   local_plan_ = halo_.plan_version();
   local_.list(lists_, tiling_, exact);
+  number_elements(exact);
+  map_hanging(exact);
+  map_halo(exact);
+}
+
+// The elements' tables, filled in parallel (each entry by its own element),
+// and the others they and the hanging links name, in between.
+void Evaluator::number_elements(bool exact) {
   const int64_t ne = lists_.edges.size(), nt = lists_.triples.size(), ns = lists_.shears.size();
   const int64_t me = ne + lists_.ring_edges.size(), mt = nt + lists_.ring_triples.size(),
                 ms = ns + lists_.ring_shears.size();
@@ -295,12 +302,7 @@ void Evaluator::build_local(bool exact) {
   each(false, [&](int32_t* at, int k, int64_t) { others += at[k] < 0; });
   auto unlisted = [&](int64_t id) { return local_.index_of_listed(id) < 0; };
   for (const HangingLink& g : lists_.hanging) others += unlisted(g.a) + unlisted(g.b);
-  // The plan's visitors capture one reference each: a std::function holds
-  // that without allocating.
-  int64_t counts[2] = {0, 0};  // received, sent
-  halo_.plan([&counts](int64_t, bool send) { ++counts[send]; });
-  const int64_t received = counts[0], sent = counts[1];
-  local_.reserve_others(size_t(others + received), exact);
+  local_.reserve_others(size_t(others), exact);
   each(false, [&](int32_t* at, int k, int64_t id) {
     if (at[k] < 0) local_.add_other(id);
   });
@@ -311,6 +313,12 @@ void Evaluator::build_local(bool exact) {
   each(true, [&](int32_t* at, int k, int64_t id) {
     if (at[k] < 0) at[k] = int32_t(local_.index_of(id));
   });
+}
+
+// Each hanging link's h, a and b; and the scratch that carries results to
+// the ends: 3 a local particle, all zero between uses, held once the lists
+// have room for hanging particles.
+void Evaluator::map_hanging(bool exact) {
   const size_t nh = lists_.hanging.size();
   LocalNumbering::room(hang_lo_, lists_.hanging, 3, exact);
   hang_lo_.resize(3 * nh);
@@ -320,16 +328,6 @@ void Evaluator::build_local(bool exact) {
     hang_lo_[3 * i + 1] = int32_t(local_.index_of(g.a));
     hang_lo_[3 * i + 2] = int32_t(local_.index_of(g.b));
   }
-  fit(halo_send_, size_t(sent), size_t(sent), exact, int32_t(-1));
-  fit(halo_recv_, size_t(received), size_t(received), exact, int32_t(-1));
-  struct {
-    const LocalNumbering& local;
-    int32_t* at[2];  // the next receive's, send's entry
-    void operator()(int64_t id, bool send) { *at[send]++ = int32_t(local.index_of(id)); }
-  } place{local_, {halo_recv_.data(), halo_send_.data()}};
-  halo_.plan([&place](int64_t id, bool send) { place(id, send); });
-  // Results on their way to the ends: 3 a local particle, all zero between
-  // uses; held once the lists have room for hanging particles.
   if (lists_.hanging.capacity() > 0) {
     const size_t room = 3 * local_capacity();
     if (exact ? hpend_lo_.capacity() != room : hpend_lo_.capacity() < room) {
@@ -339,6 +337,23 @@ void Evaluator::build_local(bool exact) {
     }
     hpend_lo_.assign(room, 0.0);
   }
+}
+
+// The halo plan's particles, sent and received, as local indices (-1: none
+// here). The plan's visitors capture one reference each: a std::function
+// holds that without allocating.
+void Evaluator::map_halo(bool exact) {
+  int64_t counts[2] = {0, 0};  // received, sent
+  halo_.plan([&counts](int64_t, bool send) { ++counts[send]; });
+  const size_t received = size_t(counts[0]), sent = size_t(counts[1]);
+  fit(halo_send_, sent, sent, exact, int32_t(-1));
+  fit(halo_recv_, received, received, exact, int32_t(-1));
+  struct {
+    const LocalNumbering& local;
+    int32_t* at[2];  // the next receive's, send's entry
+    void operator()(int64_t id, bool send) { *at[send]++ = int32_t(local.index_of(id)); }
+  } place{local_, {halo_recv_.data(), halo_send_.data()}};
+  halo_.plan([&place](int64_t id, bool send) { place(id, send); });
 }
 
 void Evaluator::interpolate_hanging_local(double* x) const {

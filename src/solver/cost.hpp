@@ -306,6 +306,9 @@ class Evaluator {
   // The numbering, the elements' local tables, the hanging links' and the
   // halo's local indices, for the lists, hanging particles and halo plan now.
   void build_local(bool exact);
+  void number_elements(bool exact);
+  void map_hanging(bool exact);
+  void map_halo(bool exact);
   void use_local();  // from now on: held and kept current
   void fit_local_tables(bool exact);
   bool local_on_ = false;
