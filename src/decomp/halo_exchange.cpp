@@ -18,6 +18,7 @@ void HaloExchange::replan(const std::vector<int>& owner) {
   MPI_Comm_rank(comm_, &me);
   peers_.clear();
   ring_.clear();
+  ++version_;
   std::map<int, Peer> peers;
   std::vector<int> near, close;
   for (int i = 0; i < tl.ni; ++i)
@@ -70,11 +71,10 @@ void HaloExchange::exchange_particles(double* a, int per) const {
   run(a, one, 1);
 }
 
-void HaloExchange::run(double* z, const Field* fields, int nfields) const {
+template <class Pack, class Unpack>
+void HaloExchange::transfer(int per, Pack&& pack, Unpack&& unpack) const {
   if (peers_.empty()) return;
   const double t0 = MPI_Wtime();
-  int per = 0;
-  for (int q = 0; q < nfields; ++q) per += fields[q].per;
   const int np = int(peers_.size());
   const int tag = 0x4a10;
   for (int k = 0; k < np; ++k) {
@@ -84,22 +84,57 @@ void HaloExchange::run(double* z, const Field* fields, int nfields) const {
   for (int k = 0; k < np; ++k) {
     std::vector<double>& b = sbuf_[k];
     b.resize(peers_[k].send.size() * per);
-    size_t u = 0;
-    for (int64_t p : peers_[k].send)
-      for (int q = 0; q < nfields; ++q)
-        for (int c = 0; c < fields[q].per; ++c) b[u++] = z[fields[q].offset + fields[q].per * p + c];
+    pack(k, b.data());
     MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, peers_[k].rank, tag, comm_, &req_[np + k]);
     bytes += int64_t(b.size() * sizeof(double));
   }
   MPI_Waitall(2 * np, req_.data(), MPI_STATUSES_IGNORE);
-  for (int k = 0; k < np; ++k) {
-    size_t u = 0;
-    for (int64_t p : peers_[k].recv)
-      for (int q = 0; q < nfields; ++q)
-        for (int c = 0; c < fields[q].per; ++c) z[fields[q].offset + fields[q].per * p + c] = rbuf_[k][u++];
-  }
+  for (int k = 0; k < np; ++k) unpack(k, rbuf_[k].data());
   ++exchanges;
   seconds += MPI_Wtime() - t0;
+}
+
+void HaloExchange::run(double* z, const Field* fields, int nfields) const {
+  int per = 0;
+  for (int q = 0; q < nfields; ++q) per += fields[q].per;
+  transfer(
+      per,
+      [&](int k, double* b) {
+        for (int64_t p : peers_[k].send)
+          for (int q = 0; q < nfields; ++q)
+            for (int c = 0; c < fields[q].per; ++c) *b++ = z[fields[q].offset + fields[q].per * p + c];
+      },
+      [&](int k, const double* b) {
+        for (int64_t p : peers_[k].recv)
+          for (int q = 0; q < nfields; ++q)
+            for (int c = 0; c < fields[q].per; ++c) z[fields[q].offset + fields[q].per * p + c] = *b++;
+      });
+}
+
+void HaloExchange::plan(const std::function<void(int64_t, bool)>& f) const {
+  for (const Peer& peer : peers_)
+    for (int64_t p : peer.send) f(p, true);
+  for (const Peer& peer : peers_)
+    for (int64_t p : peer.recv) f(p, false);
+}
+
+// The plan's particles counted on across the peers, as plan() lists them.
+void HaloExchange::exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const {
+  transfer(
+      3,
+      [&](int k, double* b) {
+        const int32_t* at = send_at;
+        for (int j = 0; j < k; ++j) at += peers_[j].send.size();
+        for (size_t u = 0; u < peers_[k].send.size(); ++u)
+          for (int c = 0; c < 3; ++c) *b++ = at[u] >= 0 ? a[3 * int64_t(at[u]) + c] : 0.0;
+      },
+      [&](int k, const double* b) {
+        const int32_t* at = recv_at;
+        for (int j = 0; j < k; ++j) at += peers_[j].recv.size();
+        for (size_t u = 0; u < peers_[k].recv.size(); ++u, b += 3)
+          if (at[u] >= 0)
+            for (int c = 0; c < 3; ++c) a[3 * int64_t(at[u]) + c] = b[c];
+      });
 }
 
 }  // namespace drape

@@ -28,6 +28,9 @@ class HaloExchange : public Halo {
 
   void exchange(double* z, int blocks) const override;
   void exchange_particles(double* a, int per) const override;
+  void plan(const std::function<void(int64_t, bool)>& f) const override;
+  uint64_t plan_version() const override { return version_; }
+  void exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const override;
 
   // Ghosts within ring_width of this rank's (ascending): the element ring.
   const std::vector<int64_t>& ring() const { return ring_; }
@@ -45,6 +48,10 @@ class HaloExchange : public Halo {
     int per;
   };
   void run(double* data, const Field* fields, int nfields) const;
+  // One exchange of `per` values a particle: pack(k, b) fills peer k's
+  // send buffer, unpack(k, b) reads its receive buffer (peers in order).
+  template <class Pack, class Unpack>
+  void transfer(int per, Pack&& pack, Unpack&& unpack) const;
 
   struct Peer {
     int rank;
@@ -54,6 +61,7 @@ class HaloExchange : public Halo {
   MPI_Comm comm_;
   int width_, ring_width_;
   int64_t n_ = 0;  // particles in the grid
+  uint64_t version_ = 0;  // replans so far
   std::vector<Peer> peers_;
   std::vector<int64_t> ring_;
   mutable std::vector<std::vector<double>> sbuf_, rbuf_;

@@ -69,6 +69,7 @@ void Evaluator::fit_arrays(bool exact) {
   each(nb_e_, ne, 1, me, int32_t(-1));
   each(nb_t_, nt, 2, mt, int32_t(-1));
   each(nb_s_, ns, 3, ms, int32_t(-1));
+  if (local_on_) fit_local_tables(exact);
   // Axes and anchors last from one step's start to the next: kept while the
   // lists stay (a new capacity for the same lists: keep_products).
   fit_keeping(axis_t_, 3 * nt, 3 * mt, exact, 0.0);
@@ -80,10 +81,18 @@ void Evaluator::fit_arrays(bool exact) {
   active_.fit(2, ns, ms, exact);
 }
 
+void Evaluator::fit_local_tables(bool exact) {
+  const size_t n = size_t(c_.grid.n());
+  fit(lo_e_, 2 * size_t(lists_.edges.size() + lists_.ring_edges.size()), 4 * n, exact, int32_t(-1));
+  fit(lo_t_, 3 * size_t(lists_.triples.size() + lists_.ring_triples.size()), 6 * n, exact, int32_t(-1));
+  fit(lo_s_, 4 * size_t(lists_.shears.size() + lists_.ring_shears.size()), 4 * n, exact, int32_t(-1));
+}
+
 void Evaluator::fit_to_lists(bool exact) {
   fit_arrays(exact);
   kg_ready_ = settled_ = false;  // the kept numbers may be gone
   rows_stamp_ = 0;               // and the rows
+  if (local_on_) build_local(exact);  // between steps: a solver sizes its local vectors by it
 }
 
 void Evaluator::keep_products(bool on) {
@@ -110,6 +119,11 @@ void Evaluator::memory(MemoryTable& t) const {
   t.add(o, "K's frozen slopes and tensions", sum({&k_slope_e_, &k_slope_t_, &k_slope_s_, &k_tension_}));
   t.add(o, "gather rows", rows_);
   t.add(o, "neighbours in list order", (nb_e_.capacity() + nb_t_.capacity() + nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "elements' particles in the own numbering",
+        (lo_e_.capacity() + lo_t_.capacity() + lo_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "own numbering (hanging, others; their halo and hanging indices)",
+        local_.bytes() + (hang_lo_.capacity() + halo_send_.capacity() + halo_recv_.capacity()) * sizeof(int32_t));
+  t.add(o, "hanging particles' results (own numbering)", hpend_lo_);
   t.add(o, "bending axes", axis_t_);
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
@@ -170,6 +184,7 @@ bool Evaluator::listed_row(int64_t p, GatherRow& row, ListWalk& walk) const {
 
 void Evaluator::list_rows(bool derive) {
   build_rows();
+  if (local_on_ && local_stale()) build_local(false);
   // New lists: the axes and anchors held are in the old lists' order. An
   // entry point that reads them first computes them from the cloth's history
   // and forces (the step's start computes both itself, with the ghosts
@@ -225,6 +240,133 @@ void Evaluator::build_rows() {
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   ListWalk walk(lists_, tiling_);
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i], walk);
+}
+
+void Evaluator::use_local() {
+  if (local_on_) return;
+  local_on_ = true;
+  fit_local_tables(true);  // the lists' sizes, as the other arrays were at their first fit
+  build_local(true);
+}
+
+// The own numbering: the free and hanging particles, then every other
+// particle an element or a hanging link touches (found where the first
+// search gives -1); then the elements', hanging links' and halo's tables.
+void Evaluator::build_local(bool exact) {
+  local_stamp_ = lists_.stamp;
+  local_hanging_ = lists_.hanging.size();
+  local_plan_ = halo_.plan_version();
+  local_.list(lists_, tiling_, exact);
+  number_elements(exact);
+  map_hanging(exact);
+  map_halo(exact);
+}
+
+// The elements' tables, filled in parallel (each entry by its own element),
+// and the others they and the hanging links name, in between.
+void Evaluator::number_elements(bool exact) {
+  const int64_t ne = lists_.edges.size(), nt = lists_.triples.size(), ns = lists_.shears.size();
+  const int64_t me = ne + lists_.ring_edges.size(), mt = nt + lists_.ring_triples.size(),
+                ms = ns + lists_.ring_shears.size();
+  auto slot = [](const ActiveList& own, const ActiveList& ring, int64_t pos) {
+    return pos < own.size() ? own.items[size_t(pos)] : ring.items[size_t(pos - own.size())];
+  };
+  // f(table, k, id) for the element at pos (its table entries, its k-th particle).
+  auto edge = [&](int64_t pos, auto&& f) {
+    edge_particles(slot(lists_.edges, lists_.ring_edges, pos), [&](int k, int64_t id) { f(&lo_e_[2 * pos], k, id); });
+  };
+  auto triple = [&](int64_t pos, auto&& f) {
+    triple_particles(slot(lists_.triples, lists_.ring_triples, pos),
+                     [&](int k, int64_t id) { f(&lo_t_[3 * pos], k, id); });
+  };
+  auto cell = [&](int64_t pos, auto&& f) {
+    cell_particles(slot(lists_.shears, lists_.ring_shears, pos), [&](int k, int64_t id) { f(&lo_s_[4 * pos], k, id); });
+  };
+  // Over every element's particles: in parallel (each entry its element's),
+  // or in list order on this thread (a serial region would allocate its team).
+  auto each = [&](bool parallel, auto&& f) {
+    if (parallel) {
+#pragma omp parallel
+      {
+#pragma omp for schedule(static) nowait
+        for (int64_t pos = 0; pos < me; ++pos) edge(pos, f);
+#pragma omp for schedule(static) nowait
+        for (int64_t pos = 0; pos < mt; ++pos) triple(pos, f);
+#pragma omp for schedule(static) nowait
+        for (int64_t pos = 0; pos < ms; ++pos) cell(pos, f);
+      }
+    } else {
+      for (int64_t pos = 0; pos < me; ++pos) edge(pos, f);
+      for (int64_t pos = 0; pos < mt; ++pos) triple(pos, f);
+      for (int64_t pos = 0; pos < ms; ++pos) cell(pos, f);
+    }
+  };
+  each(true, [&](int32_t* at, int k, int64_t id) { at[k] = int32_t(local_.index_of_listed(id)); });
+  int64_t others = 0;
+  each(false, [&](int32_t* at, int k, int64_t) { others += at[k] < 0; });
+  auto unlisted = [&](int64_t id) { return local_.index_of_listed(id) < 0; };
+  for (const HangingLink& g : lists_.hanging) others += unlisted(g.a) + unlisted(g.b);
+  local_.reserve_others(size_t(others), exact);
+  each(false, [&](int32_t* at, int k, int64_t id) {
+    if (at[k] < 0) local_.add_other(id);
+  });
+  for (const HangingLink& g : lists_.hanging)
+    for (int64_t e : {g.a, g.b})
+      if (unlisted(e)) local_.add_other(e);
+  local_.seal();
+  each(true, [&](int32_t* at, int k, int64_t id) {
+    if (at[k] < 0) at[k] = int32_t(local_.index_of(id));
+  });
+}
+
+// Each hanging link's h, a and b; and the scratch that carries results to
+// the ends: 3 a local particle, all zero between uses, held once the lists
+// have room for hanging particles.
+void Evaluator::map_hanging(bool exact) {
+  const size_t nh = lists_.hanging.size();
+  LocalNumbering::room(hang_lo_, lists_.hanging, 3, exact);
+  hang_lo_.resize(3 * nh);
+  for (size_t i = 0; i < nh; ++i) {
+    const HangingLink& g = lists_.hanging[i];
+    hang_lo_[3 * i] = int32_t(local_.index_of(g.h));
+    hang_lo_[3 * i + 1] = int32_t(local_.index_of(g.a));
+    hang_lo_[3 * i + 2] = int32_t(local_.index_of(g.b));
+  }
+  if (lists_.hanging.capacity() > 0) {
+    const size_t room = 3 * local_capacity();
+    if (exact ? hpend_lo_.capacity() != room : hpend_lo_.capacity() < room) {
+      std::vector<double> fresh;
+      fresh.reserve(room);
+      hpend_lo_.swap(fresh);
+    }
+    hpend_lo_.assign(room, 0.0);
+  }
+}
+
+// The halo plan's particles, sent and received, as local indices (-1: none
+// here). The plan's visitors capture one reference each: a std::function
+// holds that without allocating.
+void Evaluator::map_halo(bool exact) {
+  int64_t counts[2] = {0, 0};  // received, sent
+  halo_.plan([&counts](int64_t, bool send) { ++counts[send]; });
+  const size_t received = size_t(counts[0]), sent = size_t(counts[1]);
+  fit(halo_send_, sent, sent, exact, int32_t(-1));
+  fit(halo_recv_, received, received, exact, int32_t(-1));
+  struct {
+    const LocalNumbering& local;
+    int32_t* at[2];  // the next receive's, send's entry
+    void operator()(int64_t id, bool send) { *at[send]++ = int32_t(local.index_of(id)); }
+  } place{local_, {halo_recv_.data(), halo_send_.data()}};
+  halo_.plan([&place](int64_t id, bool send) { place(id, send); });
+}
+
+void Evaluator::interpolate_hanging_local(double* x) const {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  for (size_t i = hl.size(); i-- > 0;) {  // coarsest sides first: their ends are final
+    const int64_t h = hang_lo_[3 * i], a = hang_lo_[3 * i + 1], b = hang_lo_[3 * i + 2];
+    const double t = hl[i].t;
+    for (int k = 0; k < 3; ++k) x[3 * h + k] = (1 - t) * x[3 * a + k] + t * x[3 * b + k];
+  }
 }
 
 // A warp triple bends about the weft tangent, a weft triple about minus the

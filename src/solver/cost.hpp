@@ -22,6 +22,7 @@
 #include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
 #include "solver/list_walk.hpp"
+#include "solver/local_numbering.hpp"
 #include "solver/loops.hpp"
 #include "solver/memory_table.hpp"
 #include "solver/model.hpp"
@@ -104,10 +105,9 @@ class Evaluator {
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
-  // left out so that K stays positive definite). Written at the free
-  // particles' positions (hanging ones': 0) only, the entries Newton's
-  // vectors stand for (Minimizer::for_each_unknown numbers them; the linear
-  // solve copies them into its compact vectors).
+  // left out so that K stays positive definite). v and K v laid out like
+  // z's positions (tests, tools; Newton calls stiffness_product_local
+  // below): written at the free particles' positions (hanging ones': 0).
   // Needs stiffness_diagonal at the same z and lists first (Newton's linear
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
@@ -134,6 +134,28 @@ class Evaluator {
   // them. Either way, keeping products, it leaves every number the products
   // read kept (the particles' contact ones too).
   void stiffness_diagonal(const double* z, double* diag);
+  // The same two with v, K v and the diagonal in the rank's own numbering
+  // (numbering(): 3 values a particle, local_size() particles; the free
+  // ones first, in the compact vectors' order): what Newton's linear CG
+  // calls, with no vector of the grid's size. Results at the free
+  // particles' entries (hanging ones': 0, or 1 on the diagonal); v's
+  // hanging and ghost entries are written (interpolated, received), its
+  // other entries not free here must hold 0. The two above go through
+  // these (allocating: not for a step).
+  void stiffness_product_local(const double* z, double* v, double* kv);
+  void stiffness_diagonal_local(const double* z, double* diag);
+  // The numbering for the present lists (held from the first call of this
+  // or the two above, as a CG run never needs it; then built at
+  // fit_to_lists, else at the first entry point after a list change), its
+  // size and the room a solver's local vectors should have: enough for any
+  // lists up to the next fit_to_lists.
+  const LocalNumbering& numbering() {
+    list_rows(false);
+    use_local();
+    return local_;
+  }
+  int64_t local_size() { return numbering().size(); }
+  size_t local_capacity() const { return rows_.capacity() + local_.others_capacity(); }
 
   // K assembled as 3 x 3 blocks over this rank's free particles, row r for
   // lists().particles.items[r] (the compact vectors' order), hanging
@@ -286,6 +308,41 @@ class Evaluator {
   void hanging_residuals();
   template <class Own>
   void hanging_into_ends(double* out, Own&& own, double power, double fill);
+  // The same two for vectors in the own numbering (own(h, l, row, v): h's
+  // grid id, its local index).
+  void interpolate_hanging_local(double* x) const;
+  template <class Own>
+  void hanging_into_ends_local(double* out, Own&& own, double power, double fill);
+  // The numbering, the elements' local tables, the hanging links' and the
+  // halo's local indices, for the lists, hanging particles and halo plan now.
+  void build_local(bool exact);
+  void number_elements(bool exact);
+  void map_hanging(bool exact);
+  void map_halo(bool exact);
+  void use_local();  // from now on: held and kept current
+  void fit_local_tables(bool exact);
+  bool local_on_ = false;
+  bool local_stale() const {
+    return local_stamp_ != lists_.stamp || lists_.stamp == 0 || local_hanging_ != lists_.hanging.size() ||
+           local_plan_ != halo_.plan_version();
+  }
+  // Calls f(k, id) for each particle (its k-th) of the element at pos.
+  template <class F>
+  void edge_particles(int64_t s, F&& f) const {
+    f(0, s >> 1);
+    f(1, c_.next[s & 1][s >> 1]);
+  }
+  template <class F>
+  void triple_particles(int64_t s, F&& f) const {
+    f(0, c_.prev[s & 1][s >> 1]);
+    f(1, s >> 1);
+    f(2, c_.next[s & 1][s >> 1]);
+  }
+  template <class F>
+  void cell_particles(int64_t s, F&& f) const {
+    f(0, s);
+    for (int k = 0; k < 3; ++k) f(k + 1, c_.cell[k][s]);
+  }
   void clear_hanging(std::vector<double>& a);
   double window_cost(const double* z, int ic, int jc);
 
@@ -404,6 +461,17 @@ class Evaluator {
   bool asm_pattern_ = false;
   uint64_t rows_stamp_ = 0;
   size_t rows_hanging_ = 0;
+  // The own numbering (LocalNumbering) and, in list order, the local index
+  // of each element's particles (an edge's 2, a triple's 3 in the order
+  // triple_ids gives, a cell's 4 corners): the product reads v there. Per
+  // hanging link, h's, a's and b's; per particle the halo's plan sends and
+  // receives, its index (-1: none). hpend_lo_: hanging_into_ends_local's
+  // results on the way, 3 a local particle (held once there are hanging ones).
+  LocalNumbering local_;
+  std::vector<int32_t> lo_e_, lo_t_, lo_s_, hang_lo_, halo_send_, halo_recv_;
+  std::vector<double> hpend_lo_;
+  uint64_t local_stamp_ = 0, local_plan_ = 0;
+  size_t local_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
@@ -518,6 +586,41 @@ inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, d
       }
   for (const HangingLink& g : lists_.hanging)
     for (int k = 0; k < 3; ++k) out[3 * g.h + k] = fill;
+}
+
+// hanging_into_ends in the own numbering: the same sums in the same order.
+template <class Own>
+inline void Evaluator::hanging_into_ends_local(double* out, Own&& own, double power, double fill) {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  if (hl.empty()) return;
+  double* pend = hpend_lo_.data();
+  for (size_t i = 0; i < hl.size(); ++i)
+    for (int e = 0; e < 3; ++e)
+      for (int k = 0; k < 3; ++k) pend[3 * int64_t(hang_lo_[3 * i + e]) + k] = 0.0;
+  for (size_t i = 0; i < hl.size(); ++i) {
+    const HangingLink& g = hl[i];
+    const int64_t lh = hang_lo_[3 * i], la = hang_lo_[3 * i + 1], lb = hang_lo_[3 * i + 2];
+    double v[3];
+    own(g.h, lh, hanging_row(i), v);
+    const double wa = power == 1.0 ? 1 - g.t : std::pow(1 - g.t, power);
+    const double wb = power == 1.0 ? g.t : std::pow(g.t, power);
+    for (int k = 0; k < 3; ++k) {
+      v[k] += pend[3 * lh + k];
+      pend[3 * la + k] += wa * v[k];
+      pend[3 * lb + k] += wb * v[k];
+    }
+  }
+  for (size_t i = 0; i < hl.size(); ++i)
+    for (int e = 1; e < 3; ++e) {
+      const int64_t l = hang_lo_[3 * i + e];
+      const bool is_free = c_.free(e == 1 ? hl[i].a : hl[i].b);
+      for (int k = 0; k < 3; ++k) {
+        if (is_free) out[3 * l + k] += pend[3 * l + k];
+        pend[3 * l + k] = 0.0;
+      }
+    }
+  for (size_t i = 0; i < hl.size(); ++i)
+    for (int k = 0; k < 3; ++k) out[3 * int64_t(hang_lo_[3 * i]) + k] = fill;
 }
 
 }  // namespace drape

@@ -6,6 +6,9 @@
 // values; so do the particle residuals before the gradient pass, which
 // reads them at both ends of every element. The MPI version lives in src/decomp/halo_exchange; physics only
 // sees this interface.
+#include <cstdint>
+#include <functional>
+
 namespace drape {
 
 class Halo {
@@ -17,6 +20,21 @@ class Halo {
   virtual void exchange(double* z, int blocks) const = 0;
   // The same for an array of `per` values per particle (residuals).
   virtual void exchange_particles(double* a, int per) const = 0;
+
+  // Vectors in a rank's own numbering (LocalNumbering: 3 values a
+  // particle, no grid-sized array). plan(f) calls f(id, true) for each
+  // particle an exchange sends, then f(id, false) for each it receives, in
+  // the order exchange_at packs and unpacks them; plan_version() changes
+  // whenever that plan does.
+  virtual void plan(const std::function<void(int64_t, bool)>& f) const { (void)f; }
+  virtual uint64_t plan_version() const { return 0; }
+  // The ghosts' 3 values of `a`: the plan's k-th sent particle is read at
+  // a[3 send_at[k]] (sent as 0 where send_at[k] < 0: this rank holds no
+  // entry for it, so nothing of its own reads it), the k-th received one
+  // written at a[3 recv_at[k]] (dropped where < 0: nothing here reads it).
+  virtual void exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const {
+    (void)a, (void)send_at, (void)recv_at;
+  }
 };
 
 // One rank owning every tile: there are no ghosts.
