@@ -3,6 +3,7 @@
 // KES bands and particles in contact; and the paper's numerical-gradient mode
 // against the analytic one.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
@@ -11,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <string>
 
 #include "amrc/criterion.hpp"
 #include "solver/kernels.hpp"
@@ -736,6 +738,60 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
       EXPECT_FALSE(ev.diagonal_reads_settled()) << mesh;
     }
   }
+}
+
+// evaluate(z, grad) in one parallel region gives the separate regions'
+// numbers bit for bit: the cost terms, the gradient (every entry: the fused
+// one starts from NaN, so an entry it left unwritten would show), the
+// residuals in list order and at z's indices; on a plain mesh and an AMRC
+// one (hanging particles: their forces and residuals run on the master
+// thread between the passes), on one thread and on three.
+TEST(Evaluator, FusedCostGradientIsTheSeparatePasses) {
+  const int threads_before = omp_get_max_threads();
+  for (bool amrc : {false, true})
+    for (int threads : {1, 3}) {
+      omp_set_num_threads(threads);
+      // Two evaluators on like worlds, each at z and then at z moved (what
+      // one evaluation left behind must not stand in for the next's).
+      const auto apart_world = random_world(17, amrc), fused_world = random_world(17, amrc);
+      struct Out {
+        CostTerms cost;
+        std::vector<double> grad, rho, rho_grid;
+      };
+      auto run = [&](Simulation& w, bool fused, int move) {
+        Evaluator& ev = w.loop->evaluator();
+        ev.fuse_gradient(fused);
+        std::vector<double> z = w.cloth.z;
+        for (int64_t p : w.lists.particles.items) z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * move * (p % 5);
+        Out o;
+        o.grad.assign(z.size(), fused ? std::nan("") : 0.0);
+        o.cost = ev.evaluate(z.data(), o.grad.data());
+        o.rho = ev.residual();
+        o.rho_grid = ev.gradient_residual();
+        return o;
+      };
+      const std::string mesh = std::string(amrc ? "AMRC mesh, " : "plain mesh, ") + std::to_string(threads) + " threads";
+      if (amrc) {
+        ASSERT_GT(fused_world->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
+      }
+      std::vector<double> first;
+      for (int move : {0, 1}) {
+        const Out apart = run(*apart_world, false, move), fused = run(*fused_world, true, move);
+        const std::string where = mesh + (move ? ", z moved" : "");
+        EXPECT_EQ(apart.cost.newton, fused.cost.newton) << where;
+        EXPECT_EQ(apart.cost.stretch, fused.cost.stretch) << where;
+        EXPECT_EQ(apart.cost.bend, fused.cost.bend) << where;
+        EXPECT_EQ(apart.cost.shear, fused.cost.shear) << where;
+        EXPECT_EQ(apart.grad, fused.grad) << where << ": the gradient";
+        EXPECT_EQ(apart.rho, fused.rho) << where << ": the residuals";
+        EXPECT_EQ(apart.rho_grid, fused.rho_grid) << where << ": the residuals at z's indices";
+        if (move) {
+          EXPECT_NE(first, fused.grad) << where << ": the move changed nothing: the test does not test";
+        }
+        first = fused.grad;
+      }
+    }
+  omp_set_num_threads(threads_before);
 }
 
 // The element buffers are kept in list order (the ring's after this rank's),
