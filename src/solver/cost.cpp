@@ -333,10 +333,10 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
         int64_t ids[4][3];
         triple_four(run, k, z, t, ids);
         V g[4][3];
-        double sn[4], co[4];
+        double sn[4], co[4], th[4];
         bend_terms_four(t, g, sn, co);
-        for (int l = 0; l < 4; ++l)
-          triple_band(run.items[k + l], run.base + k + l, std::atan2(sn[l], co[l]), g[l], z, settle);
+        turn_atan2_four(sn, co, th);
+        for (int l = 0; l < 4; ++l) triple_band(run.items[k + l], run.base + k + l, th[l], g[l], z, settle);
       },
       [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
 }
