@@ -176,6 +176,37 @@ BENCHMARK(BM_Kernels)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime()->
 
 BENCHMARK(BM_Gradient)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// Cost + gradient in one parallel region against the separate regions
+// (Evaluator::fuse_gradient; the same numbers), back to back in each
+// repetition, each the best of its repetitions by wall and by CPU time.
+void BM_FusedOverApart(benchmark::State& state) {
+  const int n = int(state.range(0));
+  static std::map<int, std::unique_ptr<Bed>> made;
+  if (!made.count(n)) made[n] = std::make_unique<Bed>(n);
+  Bed& bed = *made[n];
+  Evaluator& ev = bed.loop->evaluator();
+  std::vector<double> g(bed.cloth.z.size());
+  double wall[2] = {1e30, 1e30}, cpu[2] = {1e30, 1e30};
+  const int per = n <= 200 ? 20 : 1;
+  for (auto _ : state)
+    for (int fused : {1, 0}) {
+      ev.fuse_gradient(fused);
+      for (int k = 0; k < per; ++k) {
+        double w = 0;
+        const double c = cpu_seconds_of([&] { w = seconds_of([&] { ev.evaluate(bed.cloth.z.data(), g.data()); }); });
+        wall[fused] = std::min(wall[fused], w);
+        cpu[fused] = std::min(cpu[fused], c);
+      }
+    }
+  ev.fuse_gradient(true);
+  state.counters["fused_ms"] = 1e3 * wall[1];
+  state.counters["apart_ms"] = 1e3 * wall[0];
+  state.counters["fused_over_apart"] = wall[1] / wall[0];
+  state.counters["cpu_fused_over_apart"] = cpu[1] / cpu[0];
+  state.counters["threads"] = omp_get_max_threads();
+}
+BENCHMARK(BM_FusedOverApart)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
 // The Newton solver's inner iteration: one stiffness product K v.
 void BM_StiffnessProduct(benchmark::State& state) {
   static Bed bed(int(state.range(0)));

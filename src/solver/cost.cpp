@@ -480,10 +480,10 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
         int64_t ids[4][3];
         triple_four(run, k, z, t, ids);
         V g[4][3];
-        double sn[4], co[4];
+        double sn[4], co[4], th[4];
         bend_terms_four(t, g, sn, co);
-        for (int l = 0; l < 4; ++l)
-          triple_band(run.items[k + l], run.base + k + l, std::atan2(sn[l], co[l]), g[l], z, settle);
+        turn_atan2_four(sn, co, th);
+        for (int l = 0; l < 4; ++l) triple_band(run.items[k + l], run.base + k + l, th[l], g[l], z, settle);
       },
       [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
 }
@@ -693,17 +693,30 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
 // ---- driver ---------------------------------------------------------------
 
 CostTerms Evaluator::reduce_costs() {
+  timed_region([&] { cost_tile_loops(); });
+  return sum_cost_tiles();
+}
+
+void Evaluator::cost_tile_loops() {
   const size_t nt = lists_.tiles.size();
   double* out = partials_.data();
-  tile_sums(lists_.particles, [&](int64_t, int64_t k) { return cost_p_[k]; }, out);
+  tile_loop(lists_.particles, [&](int64_t, int64_t k) { return cost_p_[k]; }, out);
   // Element costs sit in list order: an owned element's position is its
   // place in its list.
-  tile_sums(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
-  tile_sums(lists_.triples, [&](int64_t, int64_t k) { return cost_t_[k]; }, out + 2 * nt);
-  tile_sums(lists_.shears, [&](int64_t, int64_t k) { return cost_s_[k]; }, out + 3 * nt);
+  tile_loop(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
+  tile_loop(lists_.triples, [&](int64_t, int64_t k) { return cost_t_[k]; }, out + 2 * nt);
+  tile_loop(lists_.shears, [&](int64_t, int64_t k) { return cost_s_[k]; }, out + 3 * nt);
+}
+
+CostTerms Evaluator::sum_cost_tiles() {
   double sums[4];
-  red_.sum_tiles(lists_.tiles, out, 4, sums);
+  red_.sum_tiles(lists_.tiles, partials_.data(), 4, sums);
   return {sums[0], sums[1], sums[2], sums[3]};
+}
+
+void Evaluator::rebalance(ListCuts* const* cuts, int n) const {
+  for (int k = 0; k < n; ++k)
+    if (cuts[k] && ((k < 6 && k % 2 == 1) || pol_.schedule == Schedule::ActiveLists)) cuts[k]->rebalance();
 }
 
 // The cost pass: element forces and band costs, then each particle's
@@ -763,6 +776,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   interpolate_hanging(z);
   if (grad) size_slopes();
   refresh_pairs(z);
+  if (grad && fused_) return fused_cost_gradient(z, grad);
   const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
   if (!grad) return cost;
   halo_.exchange_particles(rho_grid_.data(), 3);
@@ -775,7 +789,58 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
                           [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
                           [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
-  // A hanging particle's gradient: its contact term and its elements'.
+  hanging_gradient(z, grad);
+  return cost;
+}
+
+// The separate passes' work, each pass the same body on the same items (so
+// each element's and particle's arithmetic is the same, and every sum in
+// the same order), with barriers where a pass reads the one before.
+CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
+  auto cost_e = [&](const ItemRun& run) { edge_forces(run, z, nullptr); };
+  auto cost_t = [&](const ItemRun& run) { triple_forces(run, z, nullptr); };
+  auto cost_s = [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, nullptr); };
+  auto residual = [&](int64_t p, int64_t pos) {
+    double* rho = &rho_[3 * pos];
+    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+    std::copy(rho, rho + 3, &rho_grid_[3 * p]);
+  };
+  auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
+  auto grad_t = [&](const ItemRun& run) { triple_gradient(run, z, grad); };
+  auto grad_s = [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); };
+  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); };
+  ListCuts* cost_cuts[7] = {};
+  ListCuts* grad_cuts[7] = {};
+  element_cuts<decltype(cost_e), decltype(cost_t), decltype(cost_s)>(cost_cuts);
+  element_cuts<decltype(grad_e), decltype(grad_t), decltype(grad_s)>(grad_cuts);
+  cost_cuts[6] = &cuts_for<decltype(residual)>(lists_.particles);
+  grad_cuts[6] = &cuts_for<decltype(gather)>(lists_.particles);
+  const int64_t nz = c_.layout.size();
+  timed_region([&](RegionTime& rt) {
+    // Nothing reads or writes the gradient before the barriers below.
+#pragma omp for schedule(static) nowait
+    for (int64_t k = 0; k < nz; ++k) grad[k] = 0.0;  // a non-unknown's gradient is 0 (tested)
+    element_loops(cost_e, cost_t, cost_s, cost_cuts);
+    team_serial(rt, [&] { hanging_forces(z); });
+    item_loops(lists_.particles, pol_, *cost_cuts[6], residual);
+    team_serial(rt, [&] {
+      clear_hanging(hres_);
+      halo_.exchange_particles(rho_grid_.data(), 3);  // MPI: on the master thread
+      hanging_residuals();
+    });
+    cost_tile_loops();  // reads the costs only: the passes after may overlap it
+    element_loops(grad_e, grad_t, grad_s, grad_cuts);
+#pragma omp barrier
+    item_loops(lists_.particles, pol_, *grad_cuts[6], gather);
+  });
+  rebalance(cost_cuts, 7);
+  rebalance(grad_cuts, 7);
+  hanging_gradient(z, grad);
+  return sum_cost_tiles();
+}
+
+// A hanging particle's gradient: its contact term and its elements'.
+void Evaluator::hanging_gradient(const double* z, double* grad) {
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * h, fc, &rho_grid_[3 * h], jtr);
@@ -787,7 +852,6 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
       v[2] += c[2];
     });
   }, 1.0, 0.0);
-  return cost;
 }
 
 // ---- AMRC hanging particles -------------------------------------------------

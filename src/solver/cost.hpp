@@ -60,6 +60,15 @@ class Evaluator {
   // One rank only (its windows reach further than the ghost ring).
   CostTerms numeric_gradient(double* z, double* grad);
 
+  // Whether evaluate(z, grad) runs in one parallel region (on from the
+  // start): the cost's element and particle passes, the residuals' halo and
+  // the hanging particles' on the master thread, the cost's tile sums and
+  // the gradient's element and particle passes, with barriers between: one
+  // fork and join where separate regions take seven. Off, the separate
+  // regions: the same numbers bit for bit
+  // (Evaluator.FusedCostGradientIsTheSeparatePasses).
+  void fuse_gradient(bool on) { fused_ = on; }
+
   // Approximate diagonal of J^T J (cost = 1/2 |residuals|^2): the diagonal
   // scaling of the unknowns. Entries of non-unknowns are set to 1.
   void scaling_diagonal(double* z, double* diag);
@@ -275,6 +284,21 @@ class Evaluator {
   }
   template <class FE, class FT, class FS, class Between, class FP>
   void passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp);
+  // The cuts of three element bodies' passes over the owned lists and the
+  // ring's, in element_loops' order (edges, the ring's, triples, ...);
+  // serial, before their region.
+  template <class FE, class FT, class FS>
+  void element_cuts(ListCuts* cuts[6]);
+  // Inside a region: the three element passes, this rank's and the ring's.
+  template <class FE, class FT, class FS>
+  void element_loops(FE& fe, FT& ft, FS& fs, ListCuts* const cuts[6]);
+  // After the region: cuts[0..n) (element_cuts' order, then the particles')
+  // follow the times measured; the ring's always (active lists), the
+  // owned lists' with that schedule. Null entries are skipped.
+  void rebalance(ListCuts* const* cuts, int n) const;
+  // evaluate(z, grad) in one parallel region (fuse_gradient).
+  CostTerms fused_cost_gradient(double* z, double* grad);
+  bool fused_ = true;
   template <class Visit>
   void for_gathered(int64_t p, Visit&& visit) const;
   template <class Add>
@@ -300,12 +324,17 @@ class Evaluator {
   void build_rows();
   bool axes_stale_ = false, anchors_stale_ = false;
   CostTerms reduce_costs();
+  // reduce_costs' tile sums into partials_, inside a region; then the sum
+  // of the tiles' (across ranks), after it.
+  void cost_tile_loops();
+  CostTerms sum_cost_tiles();
   // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
   // order: the element forces on them into their ends' residuals; residuals
   // back onto them; per-particle results (the gradient, K v, diagonals) onto
   // their ends.
   void hanging_forces(const double* z);
   void hanging_residuals();
+  void hanging_gradient(const double* z, double* grad);
   template <class Own>
   void hanging_into_ends(double* out, Own&& own, double power, double fill);
   // The same two for vectors in the own numbering (own(h, l, row, v): h's
@@ -522,22 +551,35 @@ void Evaluator::gather_listed(const GatherRow& row, Add&& add) const {
     if (at[k] >= 0) add(s + at[k]);
 }
 
+template <class FE, class FT, class FS>
+void Evaluator::element_cuts(ListCuts* cuts[6]) {
+  cuts[0] = &cuts_for<FE>(lists_.edges);
+  cuts[1] = &cuts_for<FE>(lists_.ring_edges);
+  cuts[2] = &cuts_for<FT>(lists_.triples);
+  cuts[3] = &cuts_for<FT>(lists_.ring_triples);
+  cuts[4] = &cuts_for<FS>(lists_.shears);
+  cuts[5] = &cuts_for<FS>(lists_.ring_shears);
+}
+
+template <class FE, class FT, class FS>
+void Evaluator::element_loops(FE& fe, FT& ft, FS& fs, ListCuts* const cuts[6]) {
+  const LoopPolicy ring{Schedule::ActiveLists, 1};  // the ring has no tiles
+  // A body that takes positions counts the ring's on after this rank's.
+  item_loops(lists_.edges, pol_, *cuts[0], fe);
+  if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe, lists_.edges.size());
+  item_loops(lists_.triples, pol_, *cuts[2], ft);
+  if (lists_.ring_triples.size() > 0) item_loops(lists_.ring_triples, ring, *cuts[3], ft, lists_.triples.size());
+  item_loops(lists_.shears, pol_, *cuts[4], fs);
+  if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs, lists_.shears.size());
+}
+
 template <class FE, class FT, class FS, class Between, class FP>
 void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
-  const LoopPolicy ring{Schedule::ActiveLists, 1};  // the ring has no tiles
-  ListCuts* cuts[7] = {&cuts_for<FE>(lists_.edges),   &cuts_for<FE>(lists_.ring_edges),
-                       &cuts_for<FT>(lists_.triples), &cuts_for<FT>(lists_.ring_triples),
-                       &cuts_for<FS>(lists_.shears),  &cuts_for<FS>(lists_.ring_shears), nullptr};
+  ListCuts* cuts[7] = {};
+  element_cuts<FE, FT, FS>(cuts);
   if constexpr (!std::is_same_v<FP, std::nullptr_t>) cuts[6] = &cuts_for<FP>(lists_.particles);
   timed_region([&](RegionTime& rt) {
-    // A body that takes positions counts the ring's on after this rank's.
-    item_loops(lists_.edges, pol_, *cuts[0], fe);
-    if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe, lists_.edges.size());
-    item_loops(lists_.triples, pol_, *cuts[2], ft);
-    if (lists_.ring_triples.size() > 0)
-      item_loops(lists_.ring_triples, ring, *cuts[3], ft, lists_.triples.size());
-    item_loops(lists_.shears, pol_, *cuts[4], fs);
-    if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs, lists_.shears.size());
+    element_loops(fe, ft, fs, cuts);
     if constexpr (!std::is_same_v<FP, std::nullptr_t>) {
       const double w0 = omp_get_wtime();
 #pragma omp barrier
@@ -551,10 +593,7 @@ void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
       item_loops(lists_.particles, pol_, *cuts[6], *fp);
     }
   });
-  for (int k : {1, 3, 5}) cuts[k]->rebalance();  // the ring's: active lists always
-  if (pol_.schedule == Schedule::ActiveLists)
-    for (int k : {0, 2, 4, 6})
-      if (cuts[k]) cuts[k]->rebalance();
+  rebalance(cuts, 7);
 }
 
 // Per-particle results at hanging particles (own(h, row, v) computes h's) go to
