@@ -1,6 +1,7 @@
 #include "decomp/halo_exchange.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <map>
 
 namespace drape {
@@ -18,6 +19,7 @@ void HaloExchange::replan(const std::vector<int>& owner) {
   MPI_Comm_rank(comm_, &me);
   peers_.clear();
   ring_.clear();
+  clear_contact();  // a particle it lists may have moved to another rank
   std::map<int, Peer> peers;
   std::vector<int> near, close;
   for (int i = 0; i < tl.ni; ++i)
@@ -62,43 +64,151 @@ void HaloExchange::exchange(double* z, int blocks) const {
   // Per particle: its 3 positions, then its 5 forces (z's blocks).
   const Field all[4] = {{0, 3}, {3 * n_, 2}, {5 * n_, 2}, {7 * n_, 1}};
   const bool pos = blocks & kPositions, forces = blocks & kForces;
-  run(z, pos ? all : all + 1, (pos ? 1 : 0) + (forces ? 3 : 0));
+  // Contact ghosts are read for their positions only.
+  run(z, pos ? all : all + 1, (pos ? 1 : 0) + (forces ? 3 : 0), pos ? all : nullptr);
 }
 
 void HaloExchange::exchange_particles(double* a, int per) const {
   const Field one[1] = {{0, per}};
-  run(a, one, 1);
+  run(a, one, 1, one);
 }
 
-void HaloExchange::run(double* z, const Field* fields, int nfields) const {
-  if (peers_.empty()) return;
-  const double t0 = MPI_Wtime();
-  int per = 0;
+int HaloExchange::post_receives(const Round& r, const Field* fields, int nfields, MPI_Request* req) const {
+  int per = 0, posted = 0;
   for (int q = 0; q < nfields; ++q) per += fields[q].per;
-  const int np = int(peers_.size());
-  const int tag = 0x4a10;
-  for (int k = 0; k < np; ++k) {
-    rbuf_[k].resize(peers_[k].recv.size() * per);
-    MPI_Irecv(rbuf_[k].data(), int(rbuf_[k].size()), MPI_DOUBLE, peers_[k].rank, tag, comm_, &req_[k]);
+  for (size_t k = 0; k < r.peers.size(); ++k) {
+    if (r.peers[k].recv.empty()) continue;
+    std::vector<double>& b = r.rbuf[k];
+    b.resize(r.peers[k].recv.size() * per);
+    MPI_Irecv(b.data(), int(b.size()), MPI_DOUBLE, r.peers[k].rank, r.tag, comm_, &req[posted++]);
   }
-  for (int k = 0; k < np; ++k) {
-    std::vector<double>& b = sbuf_[k];
-    b.resize(peers_[k].send.size() * per);
+  return posted;
+}
+
+int HaloExchange::post_sends(const Round& r, double* z, const Field* fields, int nfields, MPI_Request* req) const {
+  int per = 0, posted = 0;
+  for (int q = 0; q < nfields; ++q) per += fields[q].per;
+  for (size_t k = 0; k < r.peers.size(); ++k) {
+    if (r.peers[k].send.empty()) continue;
+    std::vector<double>& b = r.sbuf[k];
+    b.resize(r.peers[k].send.size() * per);
     size_t u = 0;
-    for (int64_t p : peers_[k].send)
+    for (int64_t p : r.peers[k].send)
       for (int q = 0; q < nfields; ++q)
         for (int c = 0; c < fields[q].per; ++c) b[u++] = z[fields[q].offset + fields[q].per * p + c];
-    MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, peers_[k].rank, tag, comm_, &req_[np + k]);
+    MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, r.peers[k].rank, r.tag, comm_, &req[posted++]);
     bytes += int64_t(b.size() * sizeof(double));
   }
-  MPI_Waitall(2 * np, req_.data(), MPI_STATUSES_IGNORE);
-  for (int k = 0; k < np; ++k) {
+  return posted;
+}
+
+void HaloExchange::unpack(const Round& r, double* z, const Field* fields, int nfields) const {
+  for (size_t k = 0; k < r.peers.size(); ++k) {
     size_t u = 0;
-    for (int64_t p : peers_[k].recv)
+    for (int64_t p : r.peers[k].recv)
       for (int q = 0; q < nfields; ++q)
-        for (int c = 0; c < fields[q].per; ++c) z[fields[q].offset + fields[q].per * p + c] = rbuf_[k][u++];
+        for (int c = 0; c < fields[q].per; ++c) z[fields[q].offset + fields[q].per * p + c] = r.rbuf[k][u++];
   }
+}
+
+void HaloExchange::run(double* z, const Field* fields, int nfields, const Field* contact) const {
+  const bool touch = contact && contact_ghosts() + contact_sends_ > 0;
+  if (peers_.empty() && !touch) return;
+  const double t0 = MPI_Wtime();
+  const Round tiles{peers_, sbuf_, rbuf_, 0x4a10}, near{contact_, csbuf_, crbuf_, 0x4a12};
+  req_.resize(2 * (peers_.size() + contact_.size()));
+  int posted = post_receives(tiles, fields, nfields, req_.data());
+  if (touch) posted += post_receives(near, contact, 1, req_.data() + posted);
+  posted += post_sends(tiles, z, fields, nfields, req_.data() + posted);
+  if (touch) posted += post_sends(near, z, contact, 1, req_.data() + posted);
+  MPI_Waitall(posted, req_.data(), MPI_STATUSES_IGNORE);
+  unpack(tiles, z, fields, nfields);
+  if (touch) unpack(near, z, contact, 1);
   ++exchanges;
+  seconds += MPI_Wtime() - t0;
+}
+
+int64_t HaloExchange::contact_ghosts() const {
+  int64_t g = 0;
+  for (const Peer& p : contact_) g += int64_t(p.recv.size());
+  return g;
+}
+
+void HaloExchange::clear_contact() const {
+  for (Peer& p : contact_) p.send.clear(), p.recv.clear();
+  contact_sends_ = 0;
+}
+
+void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, double* x,
+                                std::vector<int64_t>& ghosts) const {
+  const double t0 = MPI_Wtime();
+  int me = 0, size = 1;
+  MPI_Comm_rank(comm_, &me);
+  MPI_Comm_size(comm_, &size);
+  // This rank's box about its free particles, inflated by the reach (none: empty).
+  const double inf = std::numeric_limits<double>::infinity();
+  double box[6] = {inf, inf, inf, -inf, -inf, -inf};
+  for (int64_t p : own)
+    for (int i = 0; i < 3; ++i) {
+      box[i] = std::min(box[i], x[3 * p + i]);
+      box[3 + i] = std::max(box[3 + i], x[3 * p + i]);
+    }
+  for (int i = 0; i < 3; ++i) box[i] -= reach, box[3 + i] += reach;
+  boxes_.resize(6 * size_t(size));
+  MPI_Allgather(box, 6, MPI_DOUBLE, boxes_.data(), 6, MPI_DOUBLE, comm_);
+  // Each other rank gets this rank's particles inside its box, ascending.
+  sorted_.assign(own.begin(), own.end());
+  std::sort(sorted_.begin(), sorted_.end());
+  contact_.resize(size_t(size));
+  clear_contact();
+  std::vector<int> nsend(size_t(size), 0), nrecv(size_t(size), 0);
+  for (int r = 0; r < size; ++r) {
+    Peer& peer = contact_[size_t(r)];
+    peer.rank = r;
+    if (r == me) continue;
+    const double* b = &boxes_[6 * size_t(r)];
+    for (int64_t p : sorted_) {
+      const double* xp = x + 3 * p;
+      bool inside = true;
+      for (int i = 0; i < 3; ++i) inside = inside && xp[i] >= b[i] && xp[i] <= b[3 + i];
+      if (inside) peer.send.push_back(p);
+    }
+    nsend[size_t(r)] = int(peer.send.size());
+    contact_sends_ += int64_t(peer.send.size());
+  }
+  MPI_Alltoall(nsend.data(), 1, MPI_INT, nrecv.data(), 1, MPI_INT, comm_);
+  for (int r = 0; r < size; ++r) contact_[size_t(r)].recv.resize(size_t(nrecv[size_t(r)]));
+  // The first message: each particle's id, then its position (ids below 2^53 travel exactly as doubles).
+  csbuf_.resize(size_t(size));
+  crbuf_.resize(size_t(size));
+  req_.resize(2 * (peers_.size() + contact_.size()));
+  const Round near{contact_, csbuf_, crbuf_, 0x4a11};
+  const Field with_id[1] = {{0, 4}};
+  int posted = post_receives(near, with_id, 1, req_.data());
+  for (int r = 0; r < size; ++r) {
+    std::vector<double>& b = csbuf_[size_t(r)];
+    b.clear();
+    for (int64_t p : contact_[size_t(r)].send) {
+      b.push_back(double(p));
+      for (int i = 0; i < 3; ++i) b.push_back(x[3 * p + i]);
+    }
+    if (b.empty()) continue;
+    MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, r, near.tag, comm_, &req_[posted++]);
+    bytes += int64_t(b.size() * sizeof(double));
+  }
+  MPI_Waitall(posted, req_.data(), MPI_STATUSES_IGNORE);
+  ghosts.clear();
+  for (int r = 0; r < size; ++r) {
+    Peer& peer = contact_[size_t(r)];
+    const std::vector<double>& b = crbuf_[size_t(r)];
+    for (size_t k = 0; k < peer.recv.size(); ++k) {
+      const int64_t p = int64_t(b[4 * k]);
+      peer.recv[k] = p;
+      for (int i = 0; i < 3; ++i) x[3 * p + i] = b[4 * k + 1 + i];
+      ghosts.push_back(p);
+    }
+  }
+  std::sort(ghosts.begin(), ghosts.end());
   seconds += MPI_Wtime() - t0;
 }
 

@@ -8,6 +8,12 @@
 // lists the particles it sends or receives in ascending global id, so no
 // index travels. An exchange posts every receive first, then sends one
 // message per neighbour rank, then waits.
+// Contact ghosts (plan_contact, for self-contact) follow the cloth, not the
+// tiles: every rank's box about its free particles, inflated by the reach,
+// goes to every rank; each rank sends every other the ids and positions of
+// its own free particles inside that rank's box (ascending id), and the
+// same lists, values only, with every later exchange that carries
+// positions, and with every exchange of per-particle arrays.
 #include <mpi.h>
 
 #include <cstdint>
@@ -28,11 +34,15 @@ class HaloExchange : public Halo {
 
   void exchange(double* z, int blocks) const override;
   void exchange_particles(double* a, int per) const override;
+  void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
+                    std::vector<int64_t>& ghosts) const override;
 
   // Ghosts within ring_width of this rank's (ascending): the element ring.
   const std::vector<int64_t>& ring() const { return ring_; }
   int64_t ghosts() const;
   int neighbours() const { return int(peers_.size()); }
+  // Contact ghosts on this rank (the last plan_contact's; 0 after replan).
+  int64_t contact_ghosts() const;
 
   // Running totals over all exchanges on this rank.
   mutable double seconds = 0;
@@ -44,12 +54,25 @@ class HaloExchange : public Halo {
     int64_t offset;
     int per;
   };
-  void run(double* data, const Field* fields, int nfields) const;
+  // The tile plan's exchange of `fields`, with the contact plan's of
+  // `contact` (null: none) in the same round.
+  void run(double* data, const Field* fields, int nfields, const Field* contact) const;
 
   struct Peer {
     int rank;
     std::vector<int64_t> send, recv;  // particle ids, ascending
   };
+  // One plan's messages: receives posted, sends packed and posted (requests
+  // from req), and after the wait the receives unpacked.
+  struct Round {
+    const std::vector<Peer>& peers;
+    std::vector<std::vector<double>>& sbuf;
+    std::vector<std::vector<double>>& rbuf;
+    int tag;
+  };
+  int post_receives(const Round& r, const Field* fields, int nfields, MPI_Request* req) const;
+  int post_sends(const Round& r, double* data, const Field* fields, int nfields, MPI_Request* req) const;
+  void unpack(const Round& r, double* data, const Field* fields, int nfields) const;
   Tiling tiling_;
   MPI_Comm comm_;
   int width_, ring_width_;
@@ -58,6 +81,14 @@ class HaloExchange : public Halo {
   std::vector<int64_t> ring_;
   mutable std::vector<std::vector<double>> sbuf_, rbuf_;
   mutable std::vector<MPI_Request> req_;
+  // The contact plan, one entry per rank (empty lists: no messages); its
+  // buffers, and the boxes of the last plan (6 per rank).
+  mutable std::vector<Peer> contact_;
+  mutable std::vector<std::vector<double>> csbuf_, crbuf_;
+  mutable std::vector<double> boxes_;
+  mutable std::vector<int64_t> sorted_;
+  mutable int64_t contact_sends_ = 0;  // particles this rank sends in the contact plan
+  void clear_contact() const;
 };
 
 }  // namespace drape

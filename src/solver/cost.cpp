@@ -577,9 +577,9 @@ CostTerms Evaluator::settled_cost(double* z) {
   list_rows();
   // The ring's elements are settled here too, from the same positions and
   // anchors as their owners': no force halo (ranks_agree checks the bits).
+  refresh_pairs(z);
   halo_.exchange(z, Halo::kPositions);
   interpolate_hanging(z);
-  refresh_pairs(z);
   const CostTerms cost = cost_pass(z, z, false);
   settled_ = keep_;  // the elements' kept numbers are z's now (the particles' are not)
   kg_ready_ = false;
@@ -610,10 +610,10 @@ void Evaluator::fit_slopes(bool exact) {
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   list_rows();
   settled_ = false;
+  refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   if (grad) size_slopes();
-  refresh_pairs(z);
   const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
   if (!grad) return cost;
   halo_.exchange_particles(rho_grid_.data(), 3);
@@ -692,9 +692,9 @@ void Evaluator::hanging_residuals() {
 
 void Evaluator::scaling_diagonal(double* z, double* diag) {
   list_rows();
+  refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
-  refresh_pairs(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and

@@ -6,6 +6,9 @@
 // values; so do the particle residuals before the gradient pass, which
 // reads them at both ends of every element. The MPI version lives in src/decomp/halo_exchange; physics only
 // sees this interface.
+#include <cstdint>
+#include <vector>
+
 namespace drape {
 
 class Halo {
@@ -17,6 +20,18 @@ class Halo {
   virtual void exchange(double* z, int blocks) const = 0;
   // The same for an array of `per` values per particle (residuals).
   virtual void exchange_particles(double* a, int per) const = 0;
+  // Contact ghosts (self-contact's partners on other ranks, docs/design.md
+  // §1): from the positions x (3 per particle) of this rank's free
+  // particles `own`, lists in `ghosts` (ascending) every free particle of
+  // another rank within `reach` of one of them, and perhaps some further,
+  // and writes their positions into x. From then on, until the next plan or
+  // a new tile plan, exchange (with kPositions) and exchange_particles
+  // refresh them too. Collective over the ranks. One rank: none.
+  virtual void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
+                            std::vector<int64_t>& ghosts) const {
+    (void)own, (void)reach, (void)x;
+    ghosts.clear();
+  }
 };
 
 // One rank owning every tile: there are no ghosts.

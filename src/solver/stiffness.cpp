@@ -268,7 +268,10 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // but itself.
 void Evaluator::stiffness_diagonal(const double* z, double* diag) {
   list_rows();
-  refresh_pairs(z);
+  // At a z no evaluation saw (Newton's order never does that), a new pair
+  // list's contact ghosts need their positions: z's ghost entries are a
+  // copy of other ranks' values, refreshed as the other entry points do.
+  if (refresh_pairs(z)) halo_.exchange(const_cast<double*>(z), Halo::kPositions);
   k_z_ = z;
   const bool settled = settled_;
   auto edge = [&](int64_t s, int64_t pos) {
