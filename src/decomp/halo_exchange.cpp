@@ -1,6 +1,7 @@
 #include "decomp/halo_exchange.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <limits>
 #include <map>
 
@@ -209,6 +210,44 @@ void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, d
     }
   }
   std::sort(ghosts.begin(), ghosts.end());
+  seconds += MPI_Wtime() - t0;
+}
+
+void HaloExchange::keep_contact(const std::vector<int64_t>& kept) const {
+  const double t0 = MPI_Wtime();
+  const int size = int(contact_.size());
+  if (size == 0) return;  // never planned (every rank alike)
+  // Each peer's received ids that are kept (both ascending); the peer sends those only.
+  kept_in_.resize(size_t(size));
+  kept_out_.resize(size_t(size));
+  std::vector<int> nkeep(size_t(size), 0), nsend(size_t(size), 0);
+  for (int r = 0; r < size; ++r) {
+    std::vector<int64_t>& k = kept_out_[size_t(r)];
+    k.clear();
+    std::set_intersection(contact_[size_t(r)].recv.begin(), contact_[size_t(r)].recv.end(), kept.begin(), kept.end(),
+                          std::back_inserter(k));
+    nkeep[size_t(r)] = int(k.size());
+  }
+  MPI_Alltoall(nkeep.data(), 1, MPI_INT, nsend.data(), 1, MPI_INT, comm_);
+  req_.resize(2 * (peers_.size() + contact_.size()));
+  int posted = 0;
+  const int tag = 0x4a13;
+  for (int r = 0; r < size; ++r) {
+    kept_in_[size_t(r)].resize(size_t(nsend[size_t(r)]));
+    if (nsend[size_t(r)] > 0)
+      MPI_Irecv(kept_in_[size_t(r)].data(), nsend[size_t(r)], MPI_INT64_T, r, tag, comm_, &req_[posted++]);
+  }
+  for (int r = 0; r < size; ++r)
+    if (nkeep[size_t(r)] > 0)
+      MPI_Isend(kept_out_[size_t(r)].data(), nkeep[size_t(r)], MPI_INT64_T, r, tag, comm_, &req_[posted++]);
+  MPI_Waitall(posted, req_.data(), MPI_STATUSES_IGNORE);
+  contact_sends_ = 0;
+  for (int r = 0; r < size; ++r) {
+    Peer& peer = contact_[size_t(r)];
+    peer.recv.assign(kept_out_[size_t(r)].begin(), kept_out_[size_t(r)].end());
+    peer.send.assign(kept_in_[size_t(r)].begin(), kept_in_[size_t(r)].end());
+    contact_sends_ += int64_t(peer.send.size());
+  }
   seconds += MPI_Wtime() - t0;
 }
 

@@ -12,8 +12,9 @@
 // tiles: every rank's box about its free particles, inflated by the reach,
 // goes to every rank; each rank sends every other the ids and positions of
 // its own free particles inside that rank's box (ascending id), and the
-// same lists, values only, with every later exchange that carries
-// positions, and with every exchange of per-particle arrays.
+// lists narrowed to the particles the receiver reads (keep_contact), values
+// only, with every later exchange that carries positions, and with every
+// exchange of per-particle arrays.
 #include <mpi.h>
 
 #include <cstdint>
@@ -36,6 +37,7 @@ class HaloExchange : public Halo {
   void exchange_particles(double* a, int per) const override;
   void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
                     std::vector<int64_t>& ghosts) const override;
+  void keep_contact(const std::vector<int64_t>& kept) const override;
 
   // Ghosts within ring_width of this rank's (ascending): the element ring.
   const std::vector<int64_t>& ring() const { return ring_; }
@@ -87,6 +89,7 @@ class HaloExchange : public Halo {
   mutable std::vector<std::vector<double>> csbuf_, crbuf_;
   mutable std::vector<double> boxes_;
   mutable std::vector<int64_t> sorted_;
+  mutable std::vector<std::vector<int64_t>> kept_in_, kept_out_;
   mutable int64_t contact_sends_ = 0;  // particles this rank sends in the contact plan
   void clear_contact() const;
 };

@@ -32,6 +32,10 @@ class Halo {
     (void)own, (void)reach, (void)x;
     ghosts.clear();
   }
+  // Narrows the last plan to the contact ghosts `kept` (ascending, a subset
+  // of its ghosts: the ones some particle of this rank reads) in the
+  // exchanges from then on. Collective.
+  virtual void keep_contact(const std::vector<int64_t>& kept) const { (void)kept; }
 };
 
 // One rank owning every tile: there are no ghosts.

@@ -172,6 +172,22 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
     candidates(c, p, [&](int64_t q) { out[m++] = int32_t(q); });
     std::sort(out, out + m);  // the gather's fixed order: ascending global id
   }
+  keep_partners(halo);
+}
+
+// Only partners are read (their positions, K's direction, the residuals):
+// the other contact ghosts need not be refreshed.
+void SelfContact::keep_partners(const Halo& halo) {
+  partner_.assign(ghosts_.size(), 0);
+  if (!ghosts_.empty())
+    for (int64_t k = 0; k < listed_; ++k) {
+      const auto at = std::lower_bound(ghosts_.begin(), ghosts_.end(), int64_t(ids_[k]));
+      if (at != ghosts_.end() && *at == ids_[k]) partner_[size_t(at - ghosts_.begin())] = 1;
+    }
+  kept_.clear();
+  for (size_t k = 0; k < ghosts_.size(); ++k)
+    if (partner_[k]) kept_.push_back(ghosts_[k]);
+  halo.keep_contact(kept_);
 }
 
 bool SelfContact::term(const double* x, int64_t p, int64_t q, PairTerm& t) const {

@@ -91,8 +91,9 @@ class SelfContact {
   // (each once per particle) of the last build.
   uint64_t builds() const { return builds_; }
   int64_t listed() const { return listed_; }
-  // The last build's contact ghosts (other ranks' particles it hashed).
-  int64_t contact_ghosts() const { return int64_t(ghosts_.size()); }
+  // The last build's contact ghosts that are partners (other ranks'
+  // particles whose values this rank reads until the next build).
+  int64_t contact_ghosts() const { return int64_t(kept_.size()); }
   void memory(MemoryTable& t) const;
 
  private:
@@ -119,6 +120,10 @@ class SelfContact {
   std::vector<int32_t> ids_;        // partners, each particle's ascending
   std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: particles by bucket, list order
   std::vector<int64_t> ghosts_;     // the last build's contact ghosts, ascending
+  std::vector<int64_t> kept_;       // those some listed particle has as a partner
+  std::vector<char> partner_;       // per contact ghost: a partner (the build's scratch)
+  // Narrows the halo's contact ghosts to the partners (kept_).
+  void keep_partners(const Halo& halo);
 };
 
 }  // namespace drape
