@@ -115,7 +115,7 @@ void BM_Kernels(benchmark::State& state) {
   std::vector<double> g(nz), v(nz, 1e-6), kv(nz), diag(nz);
   ev.evaluate(z, g.data());  // lists and rows set up outside the timing
   ev.settled_cost(z);
-  ev.stiffness_diagonal(z, diag.data());
+  ev.stiffness_diagonal_local(z, diag.data());
   const TrafficCounts counts = traffic_counts(ev.lists(), bed.cloth);
   struct Kernel {
     const char* name;
@@ -126,7 +126,7 @@ void BM_Kernels(benchmark::State& state) {
   // The product first: evaluate() ends the settled numbers it reads (they
   // stay kept: kg_ready_), not its kept ones.
   Kernel kernels[] = {
-      {"stiffness_product", product_bytes(), [&] { ev.stiffness_product(z, v.data(), kv.data()); }},
+      {"stiffness_product", product_bytes(), [&] { ev.stiffness_product_local(z, v.data(), kv.data()); }},
       {"cost", cost_bytes(), [&] { ev.evaluate(z, nullptr); }},
       {"cost_gradient", cost_gradient_bytes(), [&] { ev.evaluate(z, g.data()); }},
   };
@@ -176,17 +176,49 @@ BENCHMARK(BM_Kernels)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime()->
 
 BENCHMARK(BM_Gradient)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// Cost + gradient in one parallel region against the separate regions
+// (Evaluator::fuse_gradient; the same numbers), back to back in each
+// repetition, each the best of its repetitions by wall and by CPU time.
+void BM_FusedOverApart(benchmark::State& state) {
+  const int n = int(state.range(0));
+  static std::map<int, std::unique_ptr<Bed>> made;
+  if (!made.count(n)) made[n] = std::make_unique<Bed>(n);
+  Bed& bed = *made[n];
+  Evaluator& ev = bed.loop->evaluator();
+  std::vector<double> g(bed.cloth.z.size());
+  double wall[2] = {1e30, 1e30}, cpu[2] = {1e30, 1e30};
+  const int per = n <= 200 ? 20 : 1;
+  for (auto _ : state)
+    for (int fused : {1, 0}) {
+      ev.fuse_gradient(fused);
+      for (int k = 0; k < per; ++k) {
+        double w = 0;
+        const double c = cpu_seconds_of([&] { w = seconds_of([&] { ev.evaluate(bed.cloth.z.data(), g.data()); }); });
+        wall[fused] = std::min(wall[fused], w);
+        cpu[fused] = std::min(cpu[fused], c);
+      }
+    }
+  ev.fuse_gradient(true);
+  state.counters["fused_ms"] = 1e3 * wall[1];
+  state.counters["apart_ms"] = 1e3 * wall[0];
+  state.counters["fused_over_apart"] = wall[1] / wall[0];
+  state.counters["cpu_fused_over_apart"] = cpu[1] / cpu[0];
+  state.counters["threads"] = omp_get_max_threads();
+}
+BENCHMARK(BM_FusedOverApart)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
 // The Newton solver's inner iteration: one stiffness product K v.
 void BM_StiffnessProduct(benchmark::State& state) {
   static Bed bed(int(state.range(0)));
+  // z's size: room for the own numbering's 3 a particle (the product's vectors).
   std::vector<double> v(bed.cloth.z.size(), 1e-6), kv(bed.cloth.z.size()), diag(bed.cloth.z.size());
   bed.loop->evaluator().hysteresis_forces(bed.cloth.z.data());
-  bed.loop->evaluator().stiffness_diagonal(bed.cloth.z.data(), diag.data());  // freezes the band slopes
+  bed.loop->evaluator().stiffness_diagonal_local(bed.cloth.z.data(), diag.data());  // freezes the band slopes
   // The diagonal keeps the z-only numbers; the products, which this times,
   // read them (one Newton linear solve: a diagonal, then dozens).
-  bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
+  bed.loop->evaluator().stiffness_product_local(bed.cloth.z.data(), v.data(), kv.data());
   for (auto _ : state) {
-    bed.loop->evaluator().stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
+    bed.loop->evaluator().stiffness_product_local(bed.cloth.z.data(), v.data(), kv.data());
     benchmark::DoNotOptimize(kv.data());
   }
 }
@@ -208,8 +240,8 @@ void BM_KeptProducts(benchmark::State& state) {
       ev.keep_products(keep == 1);
       state.ResumeTiming();
       seconds[keep] += cpu_seconds_of([&] {
-        ev.stiffness_diagonal(bed.cloth.z.data(), diag.data());
-        for (int k = 0; k < per; ++k) ev.stiffness_product(bed.cloth.z.data(), v.data(), kv.data());
+        ev.stiffness_diagonal_local(bed.cloth.z.data(), diag.data());
+        for (int k = 0; k < per; ++k) ev.stiffness_product_local(bed.cloth.z.data(), v.data(), kv.data());
       });
     }
   const double n = double(state.iterations()) * per;
@@ -258,7 +290,7 @@ void BM_AmrcPerParticle(benchmark::State& state) {
     v[b].assign(size, 1e-6), kv[b].assign(size, 0.0), g[b].assign(size, 0.0);
     std::vector<double> diag(size);
     beds[b]->loop->evaluator().hysteresis_forces(beds[b]->cloth.z.data());
-    beds[b]->loop->evaluator().stiffness_diagonal(beds[b]->cloth.z.data(), diag.data());
+    beds[b]->loop->evaluator().stiffness_diagonal_local(beds[b]->cloth.z.data(), diag.data());
   }
   double product[2] = {}, gradient[2] = {};
   const int per = 5;
@@ -267,7 +299,7 @@ void BM_AmrcPerParticle(benchmark::State& state) {
       Evaluator& ev = beds[b]->loop->evaluator();
       double* z = beds[b]->cloth.z.data();
       product[b] += cpu_seconds_of([&] {
-        for (int k = 0; k < per; ++k) ev.stiffness_product(z, v[b].data(), kv[b].data());
+        for (int k = 0; k < per; ++k) ev.stiffness_product_local(z, v[b].data(), kv[b].data());
       });
       gradient[b] += cpu_seconds_of([&] {
         for (int k = 0; k < per; ++k) ev.evaluate(z, g[b].data());
@@ -316,8 +348,8 @@ void BM_NewtonStepOverhead(benchmark::State& state) {
             ev.hysteresis_forces(z);
             ev.evaluate(z, nullptr);
           }
-          ev.stiffness_diagonal(z, diag.data());
-          ev.stiffness_product(z, v.data(), kv.data());
+          ev.stiffness_diagonal_local(z, diag.data());
+          ev.stiffness_product_local(z, v.data(), kv.data());
         });
       }
   const double reps = double(state.iterations());

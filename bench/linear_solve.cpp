@@ -5,6 +5,11 @@
 // are reported side by side (ratios from one run).
 // Kernel timings are the calling thread's CPU seconds (one thread by default).
 //   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--sweep] [--modes] [--out FILE.json]
+//     [--fitted [--fit-vectors 8] [--fit-sweeps 30] [--fit-ratio 30] [--fit-cycles 0] [--fit-levels N]
+//      [--fit-tikhonov 1e-3] [--fit-wide] [--fit-free-sums] [--fit-full-blocks] [--two-grid 1] [--two-grid-cubic]]
+// --fitted: the bilinear against the fitted P only, with how well each
+// interpolates the test vectors; --two-grid, --two-grid-cubic: two-grid
+// cycles on the finest level with richer coarse spaces (experiments).
 #include <omp.h>
 
 #include <ctime>
@@ -14,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,7 +29,16 @@
 namespace drape {
 namespace {
 
-const char* name(Interpolation ip) { return ip == Interpolation::Smoothed ? "smoothed" : "bilinear"; }
+const char* name(Interpolation ip) {
+  return ip == Interpolation::Smoothed ? "smoothed" : ip == Interpolation::Fitted ? "fitted" : "bilinear";
+}
+
+// The fitted interpolation's settings (--fit-*), and whether only the
+// bilinear and fitted P are compared (--fitted).
+MultigridSettings fit_settings;
+bool fitted_only = false;
+int two = 0;
+bool cubic = false;
 
 struct Variant {
   std::string name;
@@ -94,6 +109,251 @@ void worst_mode(Simulation& w, const BlockMatrix& K, const std::vector<int64_t>&
               rough[1][1] / (4 * total[1]), rough[1][2] / (4 * total[2]));
 }
 
+// How well the finest level's interpolation, bilinear and fitted (to 8 test
+// vectors), reproduces test vectors from their values on the coarse points:
+// |v - P v_c| / |v| over the 8 and for a 9th held out, the vectors relaxed by
+// the smoother (A e = 0, Chebyshev of degree fit_sweeps) or by 5 bilinear
+// V-cycles; and how low their energy is (v^T K v / v^T D v).
+void fit_diagnostic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n) {
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const std::vector<int64_t> coarse = coarse_points(ids, n, n, 1);
+  const Prolongation P0 = make_prolongation(ids, coarse, n, n, 1, scratch);
+  Prolongation P = fitted_pattern(ids, coarse, n, n, 1, fit_settings.fit_wide, scratch);
+  for (size_t k = 0; k < ids.size(); ++k) scratch[ids[k]] = int32_t(k);
+  std::vector<int64_t> fine_row;
+  for (int64_t p : coarse) fine_row.push_back(scratch[p]);
+  const int64_t m = 3 * K.rows;
+  const int count = 8;
+  for (int source = 0; source < 2; ++source) {
+    std::vector<double> v, zero, kv(static_cast<size_t>(m)), c(static_cast<size_t>(m));
+    random_vectors(K.rows, count + 1, v);
+    Chebyshev cheb;
+    cheb.setup(K, fit_settings.fit_sweeps, fit_settings.fit_ratio);
+    if (source == 0) {
+      relax_vectors(K, cheb, count + 1, v, zero);
+    } else {
+      Multigrid mg{MultigridSettings{}};
+      mg.setup(K, ids, n, n, 1);
+      for (int t = 0; t <= count; ++t)
+        for (int it = 0; it < 5; ++it) {
+          double* e = &v[size_t(t) * m];
+          K.multiply(e, kv.data());
+          mg.apply(kv.data(), c.data());
+          for (int64_t i = 0; i < m; ++i) e[i] -= c[i];
+        }
+    }
+    fit_prolongation(K, P0, fine_row, count, v, fit_settings.fit_tikhonov, fit_settings.fit_keep_sums,
+                     fit_settings.fit_full_blocks, P);
+    double err[2][2] = {}, rq = 0, share = 0;  // err: [P0, P][fitted set, held out]
+    std::vector<double> vc;
+    for (int t = 0; t <= count; ++t) {
+      const double* x = &v[size_t(t) * m];
+      std::vector<double> one(x, x + m);
+      inject_vectors(fine_row, K.rows, 1, one, vc);
+      double vv = 0, vkv = 0, vdv = 0;
+      K.multiply(x, kv.data());
+      for (int64_t i = 0; i < m; ++i) {
+        vv += x[i] * x[i];
+        vkv += x[i] * kv[i];
+      }
+      for (int64_t r = 0; r < K.rows; ++r) {
+        const double* d = K.block(r, int32_t(r));
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) vdv += x[3 * r + a] * d[3 * a + b] * x[3 * r + b];
+      }
+      rq += vkv / vdv / (count + 1);
+      double cc = 0;
+      for (double q : vc) cc += q * q;
+      share += cc / vv * double(K.rows) / double(coarse.size()) / (count + 1);
+      for (int which = 0; which < 2; ++which) {
+        std::fill(c.begin(), c.end(), 0.0);
+        prolong_add(which ? P : P0, vc.data(), c.data());
+        double ee = 0;
+        for (int64_t i = 0; i < m; ++i) ee += (x[i] - c[i]) * (x[i] - c[i]);
+        err[which][t == count] += t == count ? std::sqrt(ee / vv) : std::sqrt(ee / vv) / count;
+      }
+    }
+    std::printf("test vectors by %s: v^T K v / v^T D v %.2e; mean square on the coarse points / overall %.2f; "
+                "|v - P v_c| / |v| bilinear %.3f (held out %.3f), fitted %.3f (held out %.3f)\n",
+                source ? "5 bilinear V-cycles" : "the smoother", rq, share, err[0][0], err[0][1], err[1][0], err[1][1]);
+  }
+}
+
+// Preconditioned CG on A x = b from 0 to |r| <= 1e-8 |b|: the iterations.
+int pcg(const BlockMatrix& A, const std::vector<double>& b, const std::function<void(const double*, double*)>& M) {
+  const size_t n = b.size();
+  std::vector<double> x(n, 0.0), r = b, z(n), p(n), ap(n);
+  auto dot = [&](const std::vector<double>& u, const std::vector<double>& v) {
+    double d = 0;
+    for (size_t k = 0; k < n; ++k) d += u[k] * v[k];
+    return d;
+  };
+  const double target = 1e-16 * dot(b, b);
+  M(r.data(), z.data());
+  p = z;
+  double rz = dot(r, z);
+  for (int it = 1; it <= 5000; ++it) {
+    A.multiply(p.data(), ap.data());
+    const double a = rz / dot(p, ap);
+    for (size_t k = 0; k < n; ++k) {
+      x[k] += a * p[k];
+      r[k] -= a * ap[k];
+    }
+    if (dot(r, r) <= target) return it;
+    M(r.data(), z.data());
+    const double rz1 = dot(r, z);
+    for (size_t k = 0; k < n; ++k) p[k] = z[k] + rz1 / rz * p[k];
+    rz = rz1;
+  }
+  return 5000;
+}
+
+// Two functions per coarse node (adaptive smoothed aggregation's way of
+// adding near-null vectors, Brezina et al. 2004), as a two-grid experiment
+// on the finest level: P = [P0 | T P0], T_f = the 3 x 3 block [t1 t2 t3] at
+// fine point f of three vectors left by 5 bilinear V-cycles, so that the
+// coarse space holds each t_k (times any bilinear envelope) besides P0's
+// fields. PCG iterations with the two-grid cycle (point Chebyshev, Galerkin
+// coarse operator solved exactly) with P0 alone and with P, against the
+// V-cycle: whether a richer coarse space would flatten the count.
+void two_functions(const BlockMatrix& K, const std::vector<int64_t>& ids, int n, int sets) {
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const std::vector<int64_t> coarse = coarse_points(ids, n, n, 1);
+  const Prolongation P0 = make_prolongation(ids, coarse, n, n, 1, scratch);
+  const int64_t m = 3 * K.rows, nc = int64_t(coarse.size());
+  std::vector<double> t, kv(static_cast<size_t>(m)), c(static_cast<size_t>(m));
+  random_vectors(K.rows, 3 * sets, t);
+  Multigrid vc{MultigridSettings{}};
+  vc.setup(K, ids, n, n, 1);
+  for (int k = 0; k < 3 * sets; ++k)
+    for (int it = 0; it < 5; ++it) {
+      double* e = &t[size_t(k) * m];
+      K.multiply(e, kv.data());
+      vc.apply(kv.data(), c.data());
+      for (int64_t i = 0; i < m; ++i) e[i] -= c[i];
+    }
+  Prolongation P;
+  P.P.rows = K.rows;
+  P.P.start.assign(size_t(K.rows) + 1, 0);
+  for (int64_t f = 0; f < K.rows; ++f) {
+    for (int set = 0; set <= sets; ++set)
+      for (int64_t q = P0.P.start[f]; q < P0.P.start[f + 1]; ++q) {
+        const double w = P0.P.val[9 * q];
+        P.P.col.push_back(int32_t(P0.P.col[q] + set * nc));
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            P.P.val.push_back(set ? w * t[size_t(3 * (set - 1) + j) * m + 3 * f + i] : (i == j ? w : 0.0));
+      }
+    P.P.start[f + 1] = int64_t(P.P.col.size());
+  }
+  transpose(P.P, (sets + 1) * nc, P.T);
+  std::vector<double> b(static_cast<size_t>(m));
+  for (int64_t k = 0; k < m; ++k) b[k] = std::cos(double(k));
+  Chebyshev smoother;
+  smoother.setup(K, 1, 10);
+  for (int rich = 0; rich < 2; ++rich) {
+    const Prolongation& Q = rich ? P : P0;
+    BlockMatrix AP, Ac;
+    galerkin(K, Q, AP, Ac, true);
+    CoarseSolve solve;
+    solve.factor(Ac, true);
+    std::vector<double> r(static_cast<size_t>(m)), bc(3 * size_t(Q.coarse())), xc(bc.size());
+    const int its = pcg(K, b, [&](const double* rhs, double* x) {
+      smoother.smooth(K, rhs, x, true);
+      K.residual(rhs, x, r.data());
+      restrict_to(Q, r.data(), bc.data());
+      solve.solve(bc.data(), xc.data());
+      prolong_add(Q, xc.data(), x);
+      smoother.smooth(K, rhs, x, false);
+    });
+    std::printf("two-grid, P0%s: %d iterations (coarse: %lld nodes, %lld blocks)\n",
+                rich ? (" and " + std::to_string(3 * sets) + " V-cycle vectors per coarse point").c_str() : "", its,
+                (long long)Q.coarse(), (long long)Ac.blocks());
+  }
+  std::printf("V-cycle, bilinear: %d iterations\n", pcg(K, b, [&](const double* rhs, double* x) { vc.apply(rhs, x); }));
+}
+
+// Cubic (Lagrange, 4 coarse lines where there are 4, else 3 or 2) in place
+// of linear interpolation along each grid direction, on the finest level:
+// where K is of fourth order (the hanging sides' bending across the weak
+// direction), bilinear P and R = P^T are of too low an order for the
+// Galerkin coarse operator (orders of P and R summing to more than the
+// operator's are needed), cubic ones are not. Two-grid PCG as above.
+Prolongation cubic_prolongation(const std::vector<int64_t>& fine, const std::vector<int64_t>& coarse, int n) {
+  std::vector<int32_t> at(size_t(n) * n, -1);
+  for (size_t k = 0; k < coarse.size(); ++k) at[coarse[k]] = int32_t(k);
+  auto on = [&](int i) { return i % 2 == 0 || i == n - 1; };
+  auto weights = [&](int i, std::vector<std::pair<int, double>>& out) {
+    out.clear();
+    if (on(i)) {
+      out.emplace_back(i, 1.0);
+      return;
+    }
+    std::vector<int> x;
+    if (i - 3 >= 0) x.push_back(i - 3);
+    x.push_back(i - 1);
+    x.push_back(i + 1);
+    if (i + 1 < n - 1) x.push_back(std::min(i + 3, n - 1));
+    for (size_t a = 0; a < x.size(); ++a) {
+      double w = 1;
+      for (size_t b = 0; b < x.size(); ++b)
+        if (b != a) w *= double(i - x[b]) / double(x[a] - x[b]);
+      out.emplace_back(x[a], w);
+    }
+  };
+  Prolongation P;
+  P.P.rows = int64_t(fine.size());
+  P.P.start.assign(fine.size() + 1, 0);
+  std::vector<std::pair<int, double>> wi, wj;
+  for (size_t f = 0; f < fine.size(); ++f) {
+    weights(int(fine[f] / n), wi);
+    weights(int(fine[f] % n), wj);
+    std::vector<std::pair<int32_t, double>> row;
+    for (const auto& [a, u] : wi)
+      for (const auto& [b, v] : wj)
+        if (at[size_t(a) * n + b] >= 0) row.emplace_back(at[size_t(a) * n + b], u * v);
+    std::sort(row.begin(), row.end());
+    for (const auto& [c, w] : row) {
+      P.P.col.push_back(c);
+      const double blk[9] = {w, 0, 0, 0, w, 0, 0, 0, w};
+      P.P.val.insert(P.P.val.end(), blk, blk + 9);
+    }
+    P.P.start[f + 1] = int64_t(P.P.col.size());
+  }
+  transpose(P.P, int64_t(coarse.size()), P.T);
+  return P;
+}
+
+void two_grid_cubic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n) {
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const std::vector<int64_t> coarse = coarse_points(ids, n, n, 1);
+  const Prolongation P0 = make_prolongation(ids, coarse, n, n, 1, scratch);
+  const Prolongation P3 = cubic_prolongation(ids, coarse, n);
+  const int64_t m = 3 * K.rows;
+  std::vector<double> b(static_cast<size_t>(m));
+  for (int64_t k = 0; k < m; ++k) b[k] = std::cos(double(k));
+  Chebyshev smoother;
+  smoother.setup(K, 1, 10);
+  for (int cubic = 0; cubic < 2; ++cubic) {
+    const Prolongation& Q = cubic ? P3 : P0;
+    BlockMatrix AP, Ac;
+    galerkin(K, Q, AP, Ac, true);
+    CoarseSolve solve;
+    solve.factor(Ac, true);
+    std::vector<double> r(static_cast<size_t>(m)), bc(3 * size_t(Q.coarse())), xc(bc.size());
+    const int its = pcg(K, b, [&](const double* rhs, double* x) {
+      smoother.smooth(K, rhs, x, true);
+      K.residual(rhs, x, r.data());
+      restrict_to(Q, r.data(), bc.data());
+      solve.solve(bc.data(), xc.data());
+      prolong_add(Q, xc.data(), x);
+      smoother.smooth(K, rhs, x, false);
+    });
+    std::printf("two-grid, %s P: %d iterations (coarse blocks %lld)\n", cubic ? "cubic" : "bilinear", its,
+                (long long)Ac.blocks());
+  }
+}
+
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
 void kernel_times(Simulation& w, bool modes) {
@@ -112,6 +372,9 @@ void kernel_times(Simulation& w, bool modes) {
   std::vector<double> r(3 * ids.size()), x(3 * ids.size());
   for (size_t k = 0; k < r.size(); ++k) r[k] = std::cos(double(k));
   const double matvec = per_call([&] { K.multiply(r.data(), x.data()); });
+  if (fitted_only) fit_diagnostic(K, ids, n);
+  if (fitted_only && two > 0) two_functions(K, ids, n, two);
+  if (fitted_only && cubic) two_grid_cubic(K, ids, n);
   if (modes) {
     // How far below D^-1 A's top the smoother's 12-step power estimate is,
     // level by level (3000 steps taken as the truth).
@@ -146,12 +409,17 @@ void kernel_times(Simulation& w, bool modes) {
     line.smoothing = Smoothing::Line;
     worst_mode(w, K, ids, n, point, "point smoothing");
     worst_mode(w, K, ids, n, line, "line smoothing");
+    MultigridSettings fitted = fit_settings;
+    fitted.interpolation = Interpolation::Fitted;
+    worst_mode(w, K, ids, n, fitted, "fitted P");
   }
   std::printf("stiffness product %.3f ms; K assembled %.2f products, K x %.2f products (%lld blocks)\n",
               1e3 * product, assemble / product, matvec / product, (long long)K.blocks());
-  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed})
+  for (Interpolation ip : {Interpolation::Bilinear, Interpolation::Smoothed, Interpolation::Fitted})
     for (int degree : {1, 2, 3}) {
-      MultigridSettings ms{degree, 10.0, 100};
+      if ((fitted_only || ip == Interpolation::Fitted) && degree > 1) continue;
+      if (fitted_only && ip == Interpolation::Smoothed) continue;
+      MultigridSettings ms = ip == Interpolation::Fitted ? fit_settings : MultigridSettings{degree, 10.0, 100};
       ms.interpolation = ip;
       Multigrid mg(ms);
       mg.setup(K, ids, n, n, 1);
@@ -164,7 +432,7 @@ void kernel_times(Simulation& w, bool modes) {
           std::printf("  level: %lld points, %lld blocks, stride %d, set-up %.3f s, cycles %.3f s\n",
                       (long long)l.points, (long long)l.blocks, l.stride, l.setup_seconds, l.seconds);
     }
-  {
+  if (!fitted_only) {
     MultigridSettings ms;
     ms.smoothing = Smoothing::Line;
     Multigrid mg(ms);
@@ -192,14 +460,17 @@ void kernel_times(Simulation& w, bool modes) {
                              {"multigrid line", Preconditioner::Multigrid, Interpolation::Bilinear, 0, Smoothing::Line},
                              {"multigrid smoothed (finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 1},
                              {"multigrid smoothed (2 finest)", Preconditioner::Multigrid, Interpolation::Smoothed, 2},
-                             {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000}};
+                             {"multigrid smoothed", Preconditioner::Multigrid, Interpolation::Smoothed, 1000},
+                             {"multigrid fitted", Preconditioner::Multigrid, Interpolation::Fitted, 1000}};
   for (const OneSolve& o : solves) {
+    const bool fit = o.ip == Interpolation::Fitted;
+    if (fitted_only && !fit && std::string(o.name) != "multigrid bilinear") continue;
     SolverSpec spec = w.scene.solver;
     spec.preconditioner = o.pc;
     TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red(), spec);
-    MultigridSettings ms;
+    MultigridSettings ms = fit ? fit_settings : MultigridSettings{};
     ms.interpolation = o.ip;
-    ms.smoothed_levels = o.smoothed_levels;
+    if (!fit) ms.smoothed_levels = o.smoothed_levels;
     ms.smoothing = o.sm;
     loop.newton().set_multigrid(ms);
     Timers t;
@@ -227,11 +498,27 @@ int run(int argc, char** argv) {
   app.add_option("--steps", steps, "steps compared (0: the kernels and one solve only)")->check(CLI::Range(0, 100000));
   app.add_option("--threads", threads, "OpenMP threads")->check(CLI::Range(1, 1024));
   app.add_option("--out", out, "JSON file");
+  app.add_flag("--fitted", fitted_only, "compare the bilinear and the fitted P only");
+  app.add_option("--two-grid", two, "with --fitted: two-grid cycles with P0, and P0 plus 3 x this many vectors per coarse point")
+      ->check(CLI::Range(0, 4));
+  app.add_flag("--two-grid-cubic", cubic, "with --fitted: two-grid cycles with bilinear and cubic P");
+  app.add_option("--fit-vectors", fit_settings.fit_vectors, "fitted P: test vectors")->check(CLI::Range(1, 64));
+  app.add_option("--fit-sweeps", fit_settings.fit_sweeps, "fitted P: degree of their relaxation")->check(CLI::Range(1, 1000));
+  app.add_option("--fit-ratio", fit_settings.fit_ratio, "fitted P: the relaxation damps [lmax / ratio, lmax]");
+  app.add_option("--fit-cycles", fit_settings.fit_cycles, "fitted P: vectors relaxed by bilinear V-cycles (finest P only)");
+  app.add_option("--fit-levels", fit_settings.smoothed_levels, "fitted P: on this many finest levels");
+  app.add_option("--fit-tikhonov", fit_settings.fit_tikhonov, "fitted P: pull towards the bilinear weights");
+  bool wide = false, free_sums = false;
+  app.add_flag("--fit-full-blocks", fit_settings.fit_full_blocks, "fitted P: full 3 x 3 blocks (else diagonal)");
+  app.add_flag("--fit-free-sums", free_sums, "fitted P: rows need not keep the bilinear row sums");
+  app.add_flag("--fit-wide", wide, "fitted P: 6 coarse neighbours where P0 has 2 (else P0's)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  fit_settings.fit_wide = wide;
+  fit_settings.fit_keep_sums = !free_sums;
   omp_set_num_threads(threads);
   const Scene scene = landing_scene(n, dt);
   Simulation w(scene, load_fabric(scene.cloth.fabric));

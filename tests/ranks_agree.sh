@@ -6,15 +6,17 @@
 # least once. The Newton case runs with the KES reversal and air drag on, so
 # the step-start anchors of the ring's elements read the ghosts too; the
 # slope case is it with Newton's slope line search, whose slope is a sum
-# over ranks (its path must differ from the halving one's). The
+# over ranks (its path must differ from the halving one's); the kinks case
+# is it with Newton's band active set, whose re-solves follow those slopes
+# and each element's own branches, the ring's too. The
 # amrc_speed case adds amrc.coarsen_speed, whose speeds each rank computes
 # for its own particles only: it must hold back some merges. The amrc_edges
 # case starts on coarse deflection leaves, so that leaves across the box's
 # edges cut into it and split for that (the inside mask, which each rank
 # computes for its own particles): it must do so at least once.
 # Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR [CASES]
-# (CASES: some of the cases below, space-separated; default all but amrc_edges,
-# which ctest runs as a test of its own)
+# (CASES: some of the cases below, space-separated; default all but amrc_edges
+# and kinks, which ctest runs as tests of their own)
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton slope cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
@@ -39,9 +41,10 @@ for method in $cases; do
     amrc_edges) args+=("${amrc[@]}" "${edges[@]}") ;;
     sequence) args+=("${sequence[@]}") ;;
     slope) args+=(--set solver.method=newton --set solver.slope_line_search=true) ;;
+    kinks) args+=(--set solver.method=newton --set solver.band_active_set=true) ;;
     *) args+=(--set solver.method=$method) ;;
   esac
-  if [[ $method == newton || $method == slope ]]; then
+  if [[ $method == newton || $method == slope || $method == kinks ]]; then
     args+=(--set cloth.bend_reversal=5 --set cloth.shear_reversal=3 --set cloth.stretch_reversal=2 --set solver.drag=3 --set cloth.height=0.43)
   fi
   OMP_NUM_THREADS=1 "$drape" "${args[@]}" --output "$work/$method-1"
@@ -66,6 +69,11 @@ for method in $cases; do
   if [[ $method == slope && -d $work/newton-1 ]]; then
     [[ $(sum "$work/slope-1") != $(sum "$work/newton-1") ]] ||
       { echo "slope: the same state as the halving line search: the case does not reach the slope search"; exit 1; }
+  fi
+  if [[ $method == kinks ]]; then
+    "$drape" "${args[@]}" --set solver.band_active_set=false --output "$work/kinks-off" >/dev/null
+    [[ $(sum "$work/kinks-1") != $(sum "$work/kinks-off") ]] ||
+      { echo "kinks: the same state as without the active set: the case does not reach a re-solve"; exit 1; }
   fi
   if [[ $method == amrc_speed ]]; then
     merges() { report "$1" 'r["amrc"]["coarsened"]'; }

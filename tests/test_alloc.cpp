@@ -26,10 +26,11 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 namespace drape::test {
 namespace {
 
-void expect_no_allocation(bool slope_line_search) {
+void expect_no_allocation(bool slope_line_search, bool band_active_set = false) {
   Scene s;  // the box scene, small
   s.cloth.particles = {33, 33};
   s.solver.slope_line_search = slope_line_search;
+  s.solver.band_active_set = band_active_set;
   s.cloth.tile = 8;
   s.cloth.height = 0.42;
   Simulation w(s, test_fabric());
@@ -68,6 +69,8 @@ void expect_no_allocation(bool slope_line_search) {
 TEST(Allocation, NoneDuringTimeStepsWithAmrc) { expect_no_allocation(false); }
 
 TEST(Allocation, NoneWithNewtonsSlopeLineSearch) { expect_no_allocation(true); }
+
+TEST(Allocation, NoneWithNewtonsBandActiveSet) { expect_no_allocation(false, true); }
 
 }  // namespace
 }  // namespace drape::test

@@ -3,14 +3,17 @@
 // KES bands and particles in contact; and the paper's numerical-gradient mode
 // against the analytic one.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <memory>
 #include <random>
+#include <string>
 
 #include "amrc/criterion.hpp"
 #include "solver/kernels.hpp"
@@ -416,6 +419,64 @@ TEST(TripleLanes, FourTriplesAreTheScalarKernelsBitForBit) {
   }
 }
 
+// The kernels' atan2 (angle_K.hpp) against std::atan2, in units in the last
+// place of std's result: over every direction at magnitudes from 1e-12 to
+// 1e12, near the octants' edges (the axes, the diagonals, tan(pi/8) where
+// the reduction switches) and at tiny angles; the four-lane form gives the
+// scalar one's numbers bit for bit; NaN stays NaN; signed zeros and the
+// axes exact.
+TEST(AngleKernel, WithinUlpsOfStdAtan2) {
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double pi = 3.141592653589793;
+  double worst = 0;
+  auto ulps = [](double mine, double ref) {
+    const double ulp = std::nextafter(std::fabs(ref), INFINITY) - std::fabs(ref);
+    return std::fabs(mine - ref) / ulp;
+  };
+  auto check = [&](const double y[4], const double x[4]) {
+    double th[4];
+    turn_atan2_four(y, x, th);
+    for (int l = 0; l < 4; ++l) {
+      const double one = turn_atan2(y[l], x[l]);
+      ASSERT_EQ(std::memcmp(&one, &th[l], sizeof one), 0) << "lane " << l << ": " << y[l] << ", " << x[l];
+      const double e = ulps(one, std::atan2(y[l], x[l]));
+      worst = std::max(worst, e);
+      ASSERT_LE(e, 2.0) << "atan2(" << y[l] << ", " << x[l] << ") = " << std::atan2(y[l], x[l]) << ", the kernels' "
+                        << one;
+    }
+  };
+  for (int sample = 0; sample < 200000; ++sample) {
+    double y[4], x[4];
+    for (int l = 0; l < 4; ++l) {
+      const double r = std::pow(10.0, 12 * u(rng));
+      double a = pi * u(rng);
+      switch ((sample + l) % 5) {
+        case 1: a = 0.25 * pi * std::round(4 * a / pi) + 1e-9 * u(rng); break;  // near an axis or a diagonal
+        case 2: a = std::copysign(std::atan(0.41421356237309503), a) + 1e-12 * u(rng); break;  // the switch
+        case 3: a = 1e-6 * u(rng) * std::pow(10.0, -8 * std::fabs(u(rng))); break;  // tiny
+        default: break;
+      }
+      y[l] = r * std::sin(a);
+      x[l] = r * std::cos(a);
+    }
+    check(y, x);
+    if (HasFatalFailure()) return;
+  }
+  const double y[4] = {0.0, -0.0, 0.0, 1.0}, x[4] = {1.0, 1.0, -1.0, 0.0};
+  double th[4];
+  turn_atan2_four(y, x, th);
+  EXPECT_EQ(std::memcmp(&th[0], &y[0], sizeof(double)), 0) << "atan2(+0, 1) is +0";
+  EXPECT_EQ(std::memcmp(&th[1], &y[1], sizeof(double)), 0) << "atan2(-0, 1) is -0";
+  EXPECT_EQ(th[2], pi);
+  EXPECT_EQ(th[3], 0.5 * pi);
+  EXPECT_EQ(turn_atan2(0.0, 0.0), 0.0);
+  EXPECT_TRUE(std::isnan(turn_atan2(std::nan(""), 1.0)));
+  EXPECT_TRUE(std::isnan(turn_atan2(1.0, std::nan(""))));
+  EXPECT_GT(worst, 0.0) << "no sample differed from std::atan2: are both the same function?";
+  std::printf("kernels' atan2: at most %.2f ulp from std::atan2\n", worst);
+}
+
 // Four edges side by side (edge_length_four, edge_length_hv_four) give each
 // edge's scalar kernel numbers bit for bit: the length, the gradient and the
 // Hessian along the ends' moves, four different edges at a time, short and
@@ -736,6 +797,60 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
       EXPECT_FALSE(ev.diagonal_reads_settled()) << mesh;
     }
   }
+}
+
+// evaluate(z, grad) in one parallel region gives the separate regions'
+// numbers bit for bit: the cost terms, the gradient (every entry: the fused
+// one starts from NaN, so an entry it left unwritten would show), the
+// residuals in list order and at z's indices; on a plain mesh and an AMRC
+// one (hanging particles: their forces and residuals run on the master
+// thread between the passes), on one thread and on three.
+TEST(Evaluator, FusedCostGradientIsTheSeparatePasses) {
+  const int threads_before = omp_get_max_threads();
+  for (bool amrc : {false, true})
+    for (int threads : {1, 3}) {
+      omp_set_num_threads(threads);
+      // Two evaluators on like worlds, each at z and then at z moved (what
+      // one evaluation left behind must not stand in for the next's).
+      const auto apart_world = random_world(17, amrc), fused_world = random_world(17, amrc);
+      struct Out {
+        CostTerms cost;
+        std::vector<double> grad, rho, rho_grid;
+      };
+      auto run = [&](Simulation& w, bool fused, int move) {
+        Evaluator& ev = w.loop->evaluator();
+        ev.fuse_gradient(fused);
+        std::vector<double> z = w.cloth.z;
+        for (int64_t p : w.lists.particles.items) z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * move * (p % 5);
+        Out o;
+        o.grad.assign(z.size(), fused ? std::nan("") : 0.0);
+        o.cost = ev.evaluate(z.data(), o.grad.data());
+        o.rho = ev.residual();
+        o.rho_grid = ev.gradient_residual();
+        return o;
+      };
+      const std::string mesh = std::string(amrc ? "AMRC mesh, " : "plain mesh, ") + std::to_string(threads) + " threads";
+      if (amrc) {
+        ASSERT_GT(fused_world->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
+      }
+      std::vector<double> first;
+      for (int move : {0, 1}) {
+        const Out apart = run(*apart_world, false, move), fused = run(*fused_world, true, move);
+        const std::string where = mesh + (move ? ", z moved" : "");
+        EXPECT_EQ(apart.cost.newton, fused.cost.newton) << where;
+        EXPECT_EQ(apart.cost.stretch, fused.cost.stretch) << where;
+        EXPECT_EQ(apart.cost.bend, fused.cost.bend) << where;
+        EXPECT_EQ(apart.cost.shear, fused.cost.shear) << where;
+        EXPECT_EQ(apart.grad, fused.grad) << where << ": the gradient";
+        EXPECT_EQ(apart.rho, fused.rho) << where << ": the residuals";
+        EXPECT_EQ(apart.rho_grid, fused.rho_grid) << where << ": the residuals at z's indices";
+        if (move) {
+          EXPECT_NE(first, fused.grad) << where << ": the move changed nothing: the test does not test";
+        }
+        first = fused.grad;
+      }
+    }
+  omp_set_num_threads(threads_before);
 }
 
 // The element buffers are kept in list order (the ring's after this rank's),

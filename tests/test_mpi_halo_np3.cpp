@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "decomp/collective.hpp"
 #include "decomp/decomposition.hpp"
@@ -139,6 +140,47 @@ TEST(Halo, EveryGhostCarriesItsOwnerAndId) {
   for (int64_t p = 0; p < n; ++p)
     if (owner_of(p) != rank() && distance_to_mine(part.owner, p) <= 2) {
       for (int c = 0; c < 3; ++c) EXPECT_EQ(rho[3 * p + c], code(owner_of(p), p, c)) << p;
+    }
+}
+
+
+// The same exchange for a vector in a rank's own numbering (Halo::plan,
+// exchange_at): the own particles numbered backwards, the received ones
+// after them in the plan's reverse order, so that no index equals a grid
+// id's. Every fifth received particle has no index (dropped), every
+// seventh particle none on its owner (sent as 0).
+TEST(Halo, OwnNumberingCarriesOwnerAndId) {
+  const Partition part = partition_tiles(kTiling, uniform_work(), MPI_COMM_WORLD);
+  const HaloExchange halo(kTiling, part.owner, MPI_COMM_WORLD);
+  const int64_t n = int64_t(kTiling.ni) * kTiling.nj;
+  auto owner_of = [&](int64_t p) { return part.owner[kTiling.tile_of(p)]; };
+  std::vector<int64_t> sent, received;
+  halo.plan([&](int64_t p, bool send) { (send ? sent : received).push_back(p); });
+  ASSERT_EQ(int64_t(received.size()), halo.ghosts());
+  for (int64_t p : sent) EXPECT_EQ(owner_of(p), rank()) << "sends " << p;
+  for (int64_t p : received) EXPECT_NE(owner_of(p), rank()) << "receives " << p;
+  std::map<int64_t, int32_t> index;  // grid id -> own numbering
+  for (int64_t p = n - 1; p >= 0; --p)
+    if (owner_of(p) == rank() && p % 7 != 0) index[p] = int32_t(index.size());
+  for (size_t k = received.size(); k-- > 0;)
+    if (k % 5 != 0) {
+      ASSERT_EQ(index.count(received[k]), 0u) << received[k] << " received twice";
+      index[received[k]] = int32_t(index.size());
+    }
+  auto at = [&](int64_t p) { return index.count(p) ? index.at(p) : int32_t(-1); };
+  std::vector<int32_t> send_at, recv_at;
+  for (int64_t p : sent) send_at.push_back(at(p));
+  for (int64_t p : received) recv_at.push_back(at(p));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> a(3 * index.size(), nan);
+  for (const auto& [p, l] : index)
+    if (owner_of(p) == rank())
+      for (int c = 0; c < 3; ++c) a[3 * size_t(l) + c] = code(rank(), p, c);
+  halo.exchange_at(a.data(), send_at.data(), recv_at.data());
+  for (const auto& [p, l] : index)
+    for (int c = 0; c < 3; ++c) {
+      const double want = p % 7 == 0 ? 0.0 : code(owner_of(p), p, c);
+      EXPECT_EQ(a[3 * size_t(l) + c], want) << "particle " << p << " comp " << c << " on rank " << rank();
     }
 }
 

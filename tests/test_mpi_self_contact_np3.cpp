@@ -92,6 +92,9 @@ Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = So
   return out;
 }
 
+// The drape runs Newton with pairs in contact across rank borders: its
+// products K v read those partners' v, numbered as the rank's others and
+// refreshed by Halo::exchange_at, so this compares that path too.
 TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanks) {
   const Outcome one = drop(1, 2, true), two = drop(2, 1, true), three = drop(3, 1, true);
   ASSERT_FALSE(one.checksum.empty());

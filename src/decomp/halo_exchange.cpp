@@ -21,6 +21,7 @@ void HaloExchange::replan(const std::vector<int>& owner) {
   peers_.clear();
   ring_.clear();
   clear_contact();  // a particle it lists may have moved to another rank
+  ++version_;
   std::map<int, Peer> peers;
   std::vector<int> near, close;
   for (int i = 0; i < tl.ni; ++i)
@@ -74,9 +75,8 @@ void HaloExchange::exchange_particles(double* a, int per) const {
   run(a, one, 1, one);
 }
 
-int HaloExchange::post_receives(const Round& r, const Field* fields, int nfields, MPI_Request* req) const {
-  int per = 0, posted = 0;
-  for (int q = 0; q < nfields; ++q) per += fields[q].per;
+int HaloExchange::post_receives(const Round& r, int per, MPI_Request* req) const {
+  int posted = 0;
   for (size_t k = 0; k < r.peers.size(); ++k) {
     if (r.peers[k].recv.empty()) continue;
     std::vector<double>& b = r.rbuf[k];
@@ -86,47 +86,92 @@ int HaloExchange::post_receives(const Round& r, const Field* fields, int nfields
   return posted;
 }
 
-int HaloExchange::post_sends(const Round& r, double* z, const Field* fields, int nfields, MPI_Request* req) const {
-  int per = 0, posted = 0;
-  for (int q = 0; q < nfields; ++q) per += fields[q].per;
-  for (size_t k = 0; k < r.peers.size(); ++k) {
-    if (r.peers[k].send.empty()) continue;
-    std::vector<double>& b = r.sbuf[k];
-    b.resize(r.peers[k].send.size() * per);
-    size_t u = 0;
-    for (int64_t p : r.peers[k].send)
-      for (int q = 0; q < nfields; ++q)
-        for (int c = 0; c < fields[q].per; ++c) b[u++] = z[fields[q].offset + fields[q].per * p + c];
-    MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, r.peers[k].rank, r.tag, comm_, &req[posted++]);
-    bytes += int64_t(b.size() * sizeof(double));
-  }
-  return posted;
-}
-
-void HaloExchange::unpack(const Round& r, double* z, const Field* fields, int nfields) const {
-  for (size_t k = 0; k < r.peers.size(); ++k) {
-    size_t u = 0;
-    for (int64_t p : r.peers[k].recv)
-      for (int q = 0; q < nfields; ++q)
-        for (int c = 0; c < fields[q].per; ++c) z[fields[q].offset + fields[q].per * p + c] = r.rbuf[k][u++];
-  }
-}
-
-void HaloExchange::run(double* z, const Field* fields, int nfields, const Field* contact) const {
+// A peer with nothing to send or receive in a plan gets no message: both
+// sides' lists follow from the same owners (or, for contact, the counts
+// both sides hold), so the other side posts none either.
+template <class Pack, class Unpack>
+void HaloExchange::transfer(const int per[2], bool contact, Pack&& pack, Unpack&& unpack) const {
   const bool touch = contact && contact_ghosts() + contact_sends_ > 0;
   if (peers_.empty() && !touch) return;
   const double t0 = MPI_Wtime();
-  const Round tiles{peers_, sbuf_, rbuf_, 0x4a10}, near{contact_, csbuf_, crbuf_, 0x4a12};
+  const Round rounds[2] = {{peers_, sbuf_, rbuf_, 0x4a10}, {contact_, csbuf_, crbuf_, 0x4a12}};
+  const int nr = touch ? 2 : 1;
   req_.resize(2 * (peers_.size() + contact_.size()));
-  int posted = post_receives(tiles, fields, nfields, req_.data());
-  if (touch) posted += post_receives(near, contact, 1, req_.data() + posted);
-  posted += post_sends(tiles, z, fields, nfields, req_.data() + posted);
-  if (touch) posted += post_sends(near, z, contact, 1, req_.data() + posted);
+  int posted = 0;
+  for (int i = 0; i < nr; ++i) posted += post_receives(rounds[i], per[i], req_.data() + posted);
+  for (int i = 0; i < nr; ++i) {
+    const Round& r = rounds[i];
+    for (size_t k = 0; k < r.peers.size(); ++k) {
+      if (r.peers[k].send.empty()) continue;
+      std::vector<double>& b = r.sbuf[k];
+      b.resize(r.peers[k].send.size() * per[i]);
+      pack(i, k, b.data());
+      MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, r.peers[k].rank, r.tag, comm_, &req_[posted++]);
+      bytes += int64_t(b.size() * sizeof(double));
+    }
+  }
   MPI_Waitall(posted, req_.data(), MPI_STATUSES_IGNORE);
-  unpack(tiles, z, fields, nfields);
-  if (touch) unpack(near, z, contact, 1);
+  for (int i = 0; i < nr; ++i)
+    for (size_t k = 0; k < rounds[i].peers.size(); ++k)
+      if (!rounds[i].peers[k].recv.empty()) unpack(i, k, rounds[i].rbuf[k].data());
   ++exchanges;
   seconds += MPI_Wtime() - t0;
+}
+
+void HaloExchange::run(double* z, const Field* fields, int nfields, const Field* contact) const {
+  const Field* fs[2] = {fields, contact};
+  const int nf[2] = {nfields, 1};
+  int per[2] = {0, contact ? contact->per : 0};
+  for (int q = 0; q < nfields; ++q) per[0] += fields[q].per;
+  const std::vector<Peer>* plans[2] = {&peers_, &contact_};
+  transfer(
+      per, contact != nullptr,
+      [&](int i, size_t k, double* b) {
+        for (int64_t p : (*plans[i])[k].send)
+          for (int q = 0; q < nf[i]; ++q)
+            for (int c = 0; c < fs[i][q].per; ++c) *b++ = z[fs[i][q].offset + fs[i][q].per * p + c];
+      },
+      [&](int i, size_t k, const double* b) {
+        for (int64_t p : (*plans[i])[k].recv)
+          for (int q = 0; q < nf[i]; ++q)
+            for (int c = 0; c < fs[i][q].per; ++c) z[fs[i][q].offset + fs[i][q].per * p + c] = *b++;
+      });
+}
+
+void HaloExchange::plan(const std::function<void(int64_t, bool)>& f) const {
+  const std::vector<Peer>* plans[2] = {&peers_, &contact_};
+  for (const std::vector<Peer>* ps : plans)
+    for (const Peer& peer : *ps)
+      for (int64_t p : peer.send) f(p, true);
+  for (const std::vector<Peer>* ps : plans)
+    for (const Peer& peer : *ps)
+      for (int64_t p : peer.recv) f(p, false);
+}
+
+// The plan's particles counted on across the plans and peers, as plan()
+// lists them: plan i's peer k starts after every earlier one's.
+void HaloExchange::exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const {
+  const std::vector<Peer>* plans[2] = {&peers_, &contact_};
+  auto start = [&](int i, size_t k, const int32_t* at, bool send) {
+    for (int j = 0; j <= i; ++j)
+      for (size_t u = 0; u < (j < i ? plans[j]->size() : k); ++u)
+        at += send ? (*plans[j])[u].send.size() : (*plans[j])[u].recv.size();
+    return at;
+  };
+  const int per[2] = {3, 3};
+  transfer(
+      per, true,
+      [&](int i, size_t k, double* b) {
+        const int32_t* at = start(i, k, send_at, true);
+        for (size_t u = 0; u < (*plans[i])[k].send.size(); ++u)
+          for (int c = 0; c < 3; ++c) *b++ = at[u] >= 0 ? a[3 * int64_t(at[u]) + c] : 0.0;
+      },
+      [&](int i, size_t k, const double* b) {
+        const int32_t* at = start(i, k, recv_at, false);
+        for (size_t u = 0; u < (*plans[i])[k].recv.size(); ++u, b += 3)
+          if (at[u] >= 0)
+            for (int c = 0; c < 3; ++c) a[3 * int64_t(at[u]) + c] = b[c];
+      });
 }
 
 int64_t HaloExchange::contact_ghosts() const {
@@ -138,6 +183,7 @@ int64_t HaloExchange::contact_ghosts() const {
 void HaloExchange::clear_contact() const {
   for (Peer& p : contact_) p.send.clear(), p.recv.clear();
   contact_sends_ = 0;
+  ++version_;  // plan() lists the contact plan too
 }
 
 void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, double* x,
@@ -184,8 +230,7 @@ void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, d
   crbuf_.resize(size_t(size));
   req_.resize(2 * (peers_.size() + contact_.size()));
   const Round near{contact_, csbuf_, crbuf_, 0x4a11};
-  const Field with_id[1] = {{0, 4}};
-  int posted = post_receives(near, with_id, 1, req_.data());
+  int posted = post_receives(near, 4, req_.data());
   for (int r = 0; r < size; ++r) {
     std::vector<double>& b = csbuf_[size_t(r)];
     b.clear();
@@ -248,6 +293,7 @@ void HaloExchange::keep_contact(const std::vector<int64_t>& kept) const {
     peer.send.assign(kept_in_[size_t(r)].begin(), kept_in_[size_t(r)].end());
     contact_sends_ += int64_t(peer.send.size());
   }
+  ++version_;
   seconds += MPI_Wtime() - t0;
 }
 

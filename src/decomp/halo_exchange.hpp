@@ -18,6 +18,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "mesh/tiles.hpp"
@@ -38,6 +39,10 @@ class HaloExchange : public Halo {
   void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
                     std::vector<int64_t>& ghosts) const override;
   void keep_contact(const std::vector<int64_t>& kept) const override;
+  // The tile plan's particles, then the contact plan's (sent, then received).
+  void plan(const std::function<void(int64_t, bool)>& f) const override;
+  uint64_t plan_version() const override { return version_; }
+  void exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const override;
 
   // Ghosts within ring_width of this rank's (ascending): the element ring.
   const std::vector<int64_t>& ring() const { return ring_; }
@@ -59,6 +64,12 @@ class HaloExchange : public Halo {
   // The tile plan's exchange of `fields`, with the contact plan's of
   // `contact` (null: none) in the same round.
   void run(double* data, const Field* fields, int nfields, const Field* contact) const;
+  // One exchange of per[0] values a particle over the tile plan and, with
+  // `contact`, per[1] over the contact plan in the same round: pack(i, k, b)
+  // fills plan i's (0 tiles, 1 contact) peer k's send buffer, unpack(i, k, b)
+  // reads its receive buffer (plans, then peers, in order).
+  template <class Pack, class Unpack>
+  void transfer(const int per[2], bool contact, Pack&& pack, Unpack&& unpack) const;
 
   struct Peer {
     int rank;
@@ -72,13 +83,12 @@ class HaloExchange : public Halo {
     std::vector<std::vector<double>>& rbuf;
     int tag;
   };
-  int post_receives(const Round& r, const Field* fields, int nfields, MPI_Request* req) const;
-  int post_sends(const Round& r, double* data, const Field* fields, int nfields, MPI_Request* req) const;
-  void unpack(const Round& r, double* data, const Field* fields, int nfields) const;
+  int post_receives(const Round& r, int per, MPI_Request* req) const;
   Tiling tiling_;
   MPI_Comm comm_;
   int width_, ring_width_;
   int64_t n_ = 0;  // particles in the grid
+  mutable uint64_t version_ = 0;  // changes of either plan so far
   std::vector<Peer> peers_;
   std::vector<int64_t> ring_;
   mutable std::vector<std::vector<double>> sbuf_, rbuf_;

@@ -114,6 +114,13 @@ void declare_solver(ParameterList& list) {
            "which finds where a step that crosses the hysteresis bands' kinks stops descending; false: "
            "halving from the full step until the cost decreases "
            "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("true")
+      .add("band_active_set", &SolverSpec::band_active_set, "", any(),
+           "newton: re-solve with the band branches a full step lands on",
+           "Newton through the hysteresis bands' kinks: when the full step's energy slope is not within a "
+           "quarter of the slope at the start, the elements whose band branch (upper edge, lower edge, "
+           "inside) the step changed take the secant of their force as stiffness and the step is solved "
+           "again from the same point, at most twice, before the line search "
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("true")
       .add("damping", &SolverSpec::damping, "", in_half_open(0, 1), "fraction of velocity removed per step",
            "fraction of the velocity removed after each step").example("0.1")
       .add("rest_speed", &SolverSpec::rest_speed, "m/s", non_negative(), "m/s; > 0 stops once at rest",

@@ -52,7 +52,7 @@ double interpolate(const Curve& c, double q, double* slope) {
   return y[k - 1] + s * (q - x[k - 1]);
 }
 
-BandValue Band::at(double q) const {
+BandValue Band::curve_at(double q) const {
   if (tensile_ && q <= 0) {
     // Quadratic onset over [-eps, 0], then the line: no kink at rest length,
     // where unloaded edges sit (the tension branch starts with slope 0 too).

@@ -33,7 +33,13 @@ class Band {
   static Band linear(double slope, double half_width, const Curve& load = {},
                      const Curve& unload = {});
 
-  BandValue at(double q) const;
+  // Linear bands (bending and shear without measured curves: the elements'
+  // common case) inline, the same arithmetic as out of line; the others in
+  // band.cpp.
+  BandValue at(double q) const {
+    if (kind_ == Kind::Linear && !tensile_) return {slope_ * q - half_, slope_ * q + half_, slope_, slope_};
+    return curve_at(q);
+  }
 
   // Inside the band the force moves with the strain at `reversal` times the
   // loading curve's slope: 0 keeps it where it was (the band taken
@@ -72,6 +78,7 @@ class Band {
   }
 
  private:
+  BandValue curve_at(double q) const;
   enum class Kind { PowerLaw, Linear, Table } kind_ = Kind::Linear;
   double fm_ = 0, n_load_ = 1, n_unload_ = 1;  // PowerLaw
   bool tensile_ = false;

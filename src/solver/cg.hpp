@@ -23,6 +23,10 @@ struct CgSettings {
   // Newton: the line search follows the step's energy slope (SlopeSearch)
   // instead of halving until the cost decreases.
   bool slope_search = false;
+  // Newton: before the line search, a full step that lands elements on other
+  // band branches is solved again from the same z with their secant
+  // stiffness (BandActiveSet; the evaluator must track branches).
+  bool active_set = false;
   // Asked once per iteration; true ends the minimisation (wall-clock budget,
   // signals). Must answer the same on every rank: the caller makes it collective.
   std::function<bool()> stop_requested;

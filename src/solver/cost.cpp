@@ -69,18 +69,30 @@ void Evaluator::fit_arrays(bool exact) {
   each(nb_e_, ne, 1, me, int32_t(-1));
   each(nb_t_, nt, 2, mt, int32_t(-1));
   each(nb_s_, ns, 3, ms, int32_t(-1));
+  if (local_on_) fit_local_tables(exact);
   // Axes and anchors last from one step's start to the next: kept while the
   // lists stay (a new capacity for the same lists: keep_products).
   fit_keeping(axis_t_, 3 * nt, 3 * mt, exact, 0.0);
   fit_keeping(anc_e_, ne, me, exact, 0.0);
   fit_keeping(anc_t_, nt, mt, exact, 0.0);
   fit_keeping(anc_s_, ns, ms, exact, 0.0);
+  active_.fit(0, ne, me, exact);
+  active_.fit(1, nt, mt, exact);
+  active_.fit(2, ns, ms, exact);
+}
+
+void Evaluator::fit_local_tables(bool exact) {
+  const size_t n = size_t(c_.grid.n());
+  fit(lo_e_, 2 * size_t(lists_.edges.size() + lists_.ring_edges.size()), 4 * n, exact, int32_t(-1));
+  fit(lo_t_, 3 * size_t(lists_.triples.size() + lists_.ring_triples.size()), 6 * n, exact, int32_t(-1));
+  fit(lo_s_, 4 * size_t(lists_.shears.size() + lists_.ring_shears.size()), 4 * n, exact, int32_t(-1));
 }
 
 void Evaluator::fit_to_lists(bool exact) {
   fit_arrays(exact);
   kg_ready_ = settled_ = false;  // the kept numbers may be gone
   rows_stamp_ = 0;               // and the rows
+  if (local_on_) build_local(exact);  // between steps: a solver sizes its local vectors by it
 }
 
 void Evaluator::keep_products(bool on) {
@@ -107,8 +119,14 @@ void Evaluator::memory(MemoryTable& t) const {
   t.add(o, "K's frozen slopes and tensions", sum({&k_slope_e_, &k_slope_t_, &k_slope_s_, &k_tension_}));
   t.add(o, "gather rows", rows_);
   t.add(o, "neighbours in list order", (nb_e_.capacity() + nb_t_.capacity() + nb_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "elements' particles in the own numbering",
+        (lo_e_.capacity() + lo_t_.capacity() + lo_s_.capacity()) * sizeof(int32_t));
+  t.add(o, "own numbering (hanging, others; their halo and hanging indices)",
+        local_.bytes() + (hang_lo_.capacity() + halo_send_.capacity() + halo_recv_.capacity()) * sizeof(int32_t));
+  t.add(o, "hanging particles' results (own numbering)", hpend_lo_);
   t.add(o, "bending axes", axis_t_);
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
+  if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
   t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
   t.add(o, "assembly maps",
         (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
@@ -166,6 +184,7 @@ bool Evaluator::listed_row(int64_t p, GatherRow& row, ListWalk& walk) const {
 
 void Evaluator::list_rows(bool derive) {
   build_rows();
+  if (local_on_ && local_stale()) build_local(false);
   // New lists: the axes and anchors held are in the old lists' order. An
   // entry point that reads them first computes them from the cloth's history
   // and forces (the step's start computes both itself, with the ghosts
@@ -221,6 +240,138 @@ void Evaluator::build_rows() {
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   ListWalk walk(lists_, tiling_);
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i], walk);
+}
+
+void Evaluator::use_local() {
+  if (local_on_) return;
+  local_on_ = true;
+  fit_local_tables(true);  // the lists' sizes, as the other arrays were at their first fit
+  build_local(true);
+}
+
+// The own numbering: the free and hanging particles, then every other
+// particle an element, a hanging link or a pair (a contact ghost) touches
+// (found where the first search gives -1); then the elements', hanging links' and halo's tables.
+void Evaluator::build_local(bool exact) {
+  local_stamp_ = lists_.stamp;
+  local_hanging_ = lists_.hanging.size();
+  local_plan_ = halo_.plan_version();
+  local_.list(lists_, tiling_, exact);
+  number_elements(exact);
+  map_hanging(exact);
+  map_halo(exact);
+}
+
+// The elements' tables, filled in parallel (each entry by its own element),
+// and the others they and the hanging links name, in between.
+void Evaluator::number_elements(bool exact) {
+  const int64_t ne = lists_.edges.size(), nt = lists_.triples.size(), ns = lists_.shears.size();
+  const int64_t me = ne + lists_.ring_edges.size(), mt = nt + lists_.ring_triples.size(),
+                ms = ns + lists_.ring_shears.size();
+  auto slot = [](const ActiveList& own, const ActiveList& ring, int64_t pos) {
+    return pos < own.size() ? own.items[size_t(pos)] : ring.items[size_t(pos - own.size())];
+  };
+  // f(table, k, id) for the element at pos (its table entries, its k-th particle).
+  auto edge = [&](int64_t pos, auto&& f) {
+    edge_particles(slot(lists_.edges, lists_.ring_edges, pos), [&](int k, int64_t id) { f(&lo_e_[2 * pos], k, id); });
+  };
+  auto triple = [&](int64_t pos, auto&& f) {
+    triple_particles(slot(lists_.triples, lists_.ring_triples, pos),
+                     [&](int k, int64_t id) { f(&lo_t_[3 * pos], k, id); });
+  };
+  auto cell = [&](int64_t pos, auto&& f) {
+    cell_particles(slot(lists_.shears, lists_.ring_shears, pos), [&](int k, int64_t id) { f(&lo_s_[4 * pos], k, id); });
+  };
+  // Over every element's particles: in parallel (each entry its element's),
+  // or in list order on this thread (a serial region would allocate its team).
+  auto each = [&](bool parallel, auto&& f) {
+    if (parallel) {
+#pragma omp parallel
+      {
+#pragma omp for schedule(static) nowait
+        for (int64_t pos = 0; pos < me; ++pos) edge(pos, f);
+#pragma omp for schedule(static) nowait
+        for (int64_t pos = 0; pos < mt; ++pos) triple(pos, f);
+#pragma omp for schedule(static) nowait
+        for (int64_t pos = 0; pos < ms; ++pos) cell(pos, f);
+      }
+    } else {
+      for (int64_t pos = 0; pos < me; ++pos) edge(pos, f);
+      for (int64_t pos = 0; pos < mt; ++pos) triple(pos, f);
+      for (int64_t pos = 0; pos < ms; ++pos) cell(pos, f);
+    }
+  };
+  each(true, [&](int32_t* at, int k, int64_t id) { at[k] = int32_t(local_.index_of_listed(id)); });
+  int64_t others = 0;
+  each(false, [&](int32_t* at, int k, int64_t) { others += at[k] < 0; });
+  auto unlisted = [&](int64_t id) { return local_.index_of_listed(id) < 0; };
+  for (const HangingLink& g : lists_.hanging) others += unlisted(g.a) + unlisted(g.b);
+  // Self-contact's partners on other ranks: the product reads their v.
+  const std::vector<int64_t>& partners = self_.ghost_partners();
+  others += int64_t(partners.size());
+  local_.reserve_others(size_t(others), exact);
+  each(false, [&](int32_t* at, int k, int64_t id) {
+    if (at[k] < 0) local_.add_other(id);
+  });
+  for (const HangingLink& g : lists_.hanging)
+    for (int64_t e : {g.a, g.b})
+      if (unlisted(e)) local_.add_other(e);
+  for (int64_t q : partners)
+    if (unlisted(q)) local_.add_other(q);
+  local_.seal();
+  each(true, [&](int32_t* at, int k, int64_t id) {
+    if (at[k] < 0) at[k] = int32_t(local_.index_of(id));
+  });
+}
+
+// Each hanging link's h, a and b; and the scratch that carries results to
+// the ends: 3 a local particle, all zero between uses, held once the lists
+// have room for hanging particles.
+void Evaluator::map_hanging(bool exact) {
+  const size_t nh = lists_.hanging.size();
+  LocalNumbering::room(hang_lo_, lists_.hanging, 3, exact);
+  hang_lo_.resize(3 * nh);
+  for (size_t i = 0; i < nh; ++i) {
+    const HangingLink& g = lists_.hanging[i];
+    hang_lo_[3 * i] = int32_t(local_.index_of(g.h));
+    hang_lo_[3 * i + 1] = int32_t(local_.index_of(g.a));
+    hang_lo_[3 * i + 2] = int32_t(local_.index_of(g.b));
+  }
+  if (lists_.hanging.capacity() > 0) {
+    const size_t room = 3 * local_capacity();
+    if (exact ? hpend_lo_.capacity() != room : hpend_lo_.capacity() < room) {
+      std::vector<double> fresh;
+      fresh.reserve(room);
+      hpend_lo_.swap(fresh);
+    }
+    hpend_lo_.assign(room, 0.0);
+  }
+}
+
+// The halo plan's particles, sent and received, as local indices (-1: none
+// here). The plan's visitors capture one reference each: a std::function
+// holds that without allocating.
+void Evaluator::map_halo(bool exact) {
+  int64_t counts[2] = {0, 0};  // received, sent
+  halo_.plan([&counts](int64_t, bool send) { ++counts[send]; });
+  const size_t received = size_t(counts[0]), sent = size_t(counts[1]);
+  fit(halo_send_, sent, sent, exact, int32_t(-1));
+  fit(halo_recv_, received, received, exact, int32_t(-1));
+  struct {
+    const LocalNumbering& local;
+    int32_t* at[2];  // the next receive's, send's entry
+    void operator()(int64_t id, bool send) { *at[send]++ = int32_t(local.index_of(id)); }
+  } place{local_, {halo_recv_.data(), halo_send_.data()}};
+  halo_.plan([&place](int64_t id, bool send) { place(id, send); });
+}
+
+void Evaluator::interpolate_hanging_local(double* x) const {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  for (size_t i = hl.size(); i-- > 0;) {  // coarsest sides first: their ends are final
+    const int64_t h = hang_lo_[3 * i], a = hang_lo_[3 * i + 1], b = hang_lo_[3 * i + 2];
+    const double t = hl[i].t;
+    for (int k = 0; k < 3; ++k) x[3 * h + k] = (1 - t) * x[3 * a + k] + t * x[3 * b + k];
+  }
 }
 
 // A warp triple bends about the weft tangent, a weft triple about minus the
@@ -291,6 +442,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
+  active_.note(0, pos, L / L0 - 1.0, bv, st);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
   if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
@@ -333,10 +485,10 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
         int64_t ids[4][3];
         triple_four(run, k, z, t, ids);
         V g[4][3];
-        double sn[4], co[4];
+        double sn[4], co[4], th[4];
         bend_terms_four(t, g, sn, co);
-        for (int l = 0; l < 4; ++l)
-          triple_band(run.items[k + l], run.base + k + l, std::atan2(sn[l], co[l]), g[l], z, settle);
+        turn_atan2_four(sn, co, th);
+        for (int l = 0; l < 4; ++l) triple_band(run.items[k + l], run.base + k + l, th[l], g[l], z, settle);
       },
       [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
 }
@@ -346,6 +498,7 @@ void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], con
   const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
+  active_.note(1, pos, th / Lm, bv, st);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
   if (settle && keep_) kept_gradients(w * st.df_dq / Lm, g, 3, &kg_t_[kKgTriple * pos]);
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
@@ -368,6 +521,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const double A = c_.shear_area[s];
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
+  active_.note(2, pos, phi, bv, st);
   const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
   if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
@@ -544,17 +698,30 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
 // ---- driver ---------------------------------------------------------------
 
 CostTerms Evaluator::reduce_costs() {
+  timed_region([&] { cost_tile_loops(); });
+  return sum_cost_tiles();
+}
+
+void Evaluator::cost_tile_loops() {
   const size_t nt = lists_.tiles.size();
   double* out = partials_.data();
-  tile_sums(lists_.particles, [&](int64_t, int64_t k) { return cost_p_[k]; }, out);
+  tile_loop(lists_.particles, [&](int64_t, int64_t k) { return cost_p_[k]; }, out);
   // Element costs sit in list order: an owned element's position is its
   // place in its list.
-  tile_sums(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
-  tile_sums(lists_.triples, [&](int64_t, int64_t k) { return cost_t_[k]; }, out + 2 * nt);
-  tile_sums(lists_.shears, [&](int64_t, int64_t k) { return cost_s_[k]; }, out + 3 * nt);
+  tile_loop(lists_.edges, [&](int64_t, int64_t k) { return cost_e_[k]; }, out + nt);
+  tile_loop(lists_.triples, [&](int64_t, int64_t k) { return cost_t_[k]; }, out + 2 * nt);
+  tile_loop(lists_.shears, [&](int64_t, int64_t k) { return cost_s_[k]; }, out + 3 * nt);
+}
+
+CostTerms Evaluator::sum_cost_tiles() {
   double sums[4];
-  red_.sum_tiles(lists_.tiles, out, 4, sums);
+  red_.sum_tiles(lists_.tiles, partials_.data(), 4, sums);
   return {sums[0], sums[1], sums[2], sums[3]};
+}
+
+void Evaluator::rebalance(ListCuts* const* cuts, int n) const {
+  for (int k = 0; k < n; ++k)
+    if (cuts[k] && ((k < 6 && k % 2 == 1) || pol_.schedule == Schedule::ActiveLists)) cuts[k]->rebalance();
 }
 
 // The cost pass: element forces and band costs, then each particle's
@@ -614,6 +781,7 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   if (grad) size_slopes();
+  if (grad && fused_) return fused_cost_gradient(z, grad);
   const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
   if (!grad) return cost;
   halo_.exchange_particles(rho_grid_.data(), 3);
@@ -626,7 +794,58 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
                           [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
                           [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
-  // A hanging particle's gradient: its contact term and its elements'.
+  hanging_gradient(z, grad);
+  return cost;
+}
+
+// The separate passes' work, each pass the same body on the same items (so
+// each element's and particle's arithmetic is the same, and every sum in
+// the same order), with barriers where a pass reads the one before.
+CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
+  auto cost_e = [&](const ItemRun& run) { edge_forces(run, z, nullptr); };
+  auto cost_t = [&](const ItemRun& run) { triple_forces(run, z, nullptr); };
+  auto cost_s = [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, nullptr); };
+  auto residual = [&](int64_t p, int64_t pos) {
+    double* rho = &rho_[3 * pos];
+    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+    std::copy(rho, rho + 3, &rho_grid_[3 * p]);
+  };
+  auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
+  auto grad_t = [&](const ItemRun& run) { triple_gradient(run, z, grad); };
+  auto grad_s = [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); };
+  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); };
+  ListCuts* cost_cuts[7] = {};
+  ListCuts* grad_cuts[7] = {};
+  element_cuts<decltype(cost_e), decltype(cost_t), decltype(cost_s)>(cost_cuts);
+  element_cuts<decltype(grad_e), decltype(grad_t), decltype(grad_s)>(grad_cuts);
+  cost_cuts[6] = &cuts_for<decltype(residual)>(lists_.particles);
+  grad_cuts[6] = &cuts_for<decltype(gather)>(lists_.particles);
+  const int64_t nz = c_.layout.size();
+  timed_region([&](RegionTime& rt) {
+    // Nothing reads or writes the gradient before the barriers below.
+#pragma omp for schedule(static) nowait
+    for (int64_t k = 0; k < nz; ++k) grad[k] = 0.0;  // a non-unknown's gradient is 0 (tested)
+    element_loops(cost_e, cost_t, cost_s, cost_cuts);
+    team_serial(rt, [&] { hanging_forces(z); });
+    item_loops(lists_.particles, pol_, *cost_cuts[6], residual);
+    team_serial(rt, [&] {
+      clear_hanging(hres_);
+      halo_.exchange_particles(rho_grid_.data(), 3);  // MPI: on the master thread
+      hanging_residuals();
+    });
+    cost_tile_loops();  // reads the costs only: the passes after may overlap it
+    element_loops(grad_e, grad_t, grad_s, grad_cuts);
+#pragma omp barrier
+    item_loops(lists_.particles, pol_, *grad_cuts[6], gather);
+  });
+  rebalance(cost_cuts, 7);
+  rebalance(grad_cuts, 7);
+  hanging_gradient(z, grad);
+  return sum_cost_tiles();
+}
+
+// A hanging particle's gradient: its contact term and its elements'.
+void Evaluator::hanging_gradient(const double* z, double* grad) {
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * h, fc, &rho_grid_[3 * h], jtr);
@@ -638,7 +857,6 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
       v[2] += c[2];
     });
   }, 1.0, 0.0);
-  return cost;
 }
 
 // ---- AMRC hanging particles -------------------------------------------------

@@ -18,9 +18,11 @@
 
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
+#include "solver/band_active_set.hpp"
 #include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
 #include "solver/list_walk.hpp"
+#include "solver/local_numbering.hpp"
 #include "solver/loops.hpp"
 #include "solver/memory_table.hpp"
 #include "solver/model.hpp"
@@ -57,6 +59,15 @@ class Evaluator {
   // the cost of the patch of the mesh it can change (the paper's approach).
   // One rank only (its windows reach further than the ghost ring).
   CostTerms numeric_gradient(double* z, double* grad);
+
+  // Whether evaluate(z, grad) runs in one parallel region (on from the
+  // start): the cost's element and particle passes, the residuals' halo and
+  // the hanging particles' on the master thread, the cost's tile sums and
+  // the gradient's element and particle passes, with barriers between: one
+  // fork and join where separate regions take seven. Off, the separate
+  // regions: the same numbers bit for bit
+  // (Evaluator.FusedCostGradientIsTheSeparatePasses).
+  void fuse_gradient(bool on) { fused_ = on; }
 
   // Approximate diagonal of J^T J (cost = 1/2 |residuals|^2): the diagonal
   // scaling of the unknowns. Entries of non-unknowns are set to 1.
@@ -103,10 +114,9 @@ class Evaluator {
   // Kv = dr/dx v for the Newton residual r (N) with the forces at their
   // targets: mass, material stiffness, the stretch geometric term and the
   // contact normal term (the indefinite bending/shear geometric terms are
-  // left out so that K stays positive definite). Written at the free
-  // particles' positions (hanging ones': 0) only, the entries Newton's
-  // vectors stand for (Minimizer::for_each_unknown numbers them; the linear
-  // solve copies them into its compact vectors).
+  // left out so that K stays positive definite). v and K v laid out like
+  // z's positions (tests, tools; Newton calls stiffness_product_local
+  // below): written at the free particles' positions (hanging ones': 0).
   // Needs stiffness_diagonal at the same z and lists first (Newton's linear
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
@@ -115,6 +125,15 @@ class Evaluator {
   // product computes them again, the same numbers (bench_gradient's
   // BM_KeptProducts times both). Allocates: call it before the time loop.
   void keep_products(bool on);
+  // Newton through the bands' kinks (band_active_set.hpp): on, every
+  // evaluation notes each band element's strain, force and branch.
+  // Allocates: call it before the time loop.
+  void track_branches(bool on);
+  BandActiveSet& branches() { return active_; }
+  // Right after settled_cost at z: each element that changed branch at the
+  // last trial gets its secant as K's band slope; how many did (this rank's,
+  // the ring's included).
+  int64_t kink_tangents();
   // Its diagonal, at the same entries. Also freezes each element's band
   // slope (and each edge's tension) at z for stiffness_product, so that a
   // product evaluates no band, power law or angle: those cost more than the
@@ -124,6 +143,28 @@ class Evaluator {
   // them. Either way, keeping products, it leaves every number the products
   // read kept (the particles' contact ones too).
   void stiffness_diagonal(const double* z, double* diag);
+  // The same two with v, K v and the diagonal in the rank's own numbering
+  // (numbering(): 3 values a particle, local_size() particles; the free
+  // ones first, in the compact vectors' order): what Newton's linear CG
+  // calls, with no vector of the grid's size. Results at the free
+  // particles' entries (hanging ones': 0, or 1 on the diagonal); v's
+  // hanging and ghost entries are written (interpolated, received), its
+  // other entries not free here must hold 0. The two above go through
+  // these (allocating: not for a step).
+  void stiffness_product_local(const double* z, double* v, double* kv);
+  void stiffness_diagonal_local(const double* z, double* diag);
+  // The numbering for the present lists (held from the first call of this
+  // or the two above, as a CG run never needs it; then built at
+  // fit_to_lists, else at the first entry point after a list change), its
+  // size and the room a solver's local vectors should have: enough for any
+  // lists up to the next fit_to_lists.
+  const LocalNumbering& numbering() {
+    list_rows(false);
+    use_local();
+    return local_;
+  }
+  int64_t local_size() { return numbering().size(); }
+  size_t local_capacity() const { return rows_.capacity() + local_.others_capacity(); }
 
   // K assembled as 3 x 3 blocks over this rank's free particles, row r for
   // lists().particles.items[r] (the compact vectors' order), hanging
@@ -243,6 +284,21 @@ class Evaluator {
   }
   template <class FE, class FT, class FS, class Between, class FP>
   void passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp);
+  // The cuts of three element bodies' passes over the owned lists and the
+  // ring's, in element_loops' order (edges, the ring's, triples, ...);
+  // serial, before their region.
+  template <class FE, class FT, class FS>
+  void element_cuts(ListCuts* cuts[6]);
+  // Inside a region: the three element passes, this rank's and the ring's.
+  template <class FE, class FT, class FS>
+  void element_loops(FE& fe, FT& ft, FS& fs, ListCuts* const cuts[6]);
+  // After the region: cuts[0..n) (element_cuts' order, then the particles')
+  // follow the times measured; the ring's always (active lists), the
+  // owned lists' with that schedule. Null entries are skipped.
+  void rebalance(ListCuts* const* cuts, int n) const;
+  // evaluate(z, grad) in one parallel region (fuse_gradient).
+  CostTerms fused_cost_gradient(double* z, double* grad);
+  bool fused_ = true;
   template <class Visit>
   void for_gathered(int64_t p, Visit&& visit) const;
   template <class Add>
@@ -268,14 +324,54 @@ class Evaluator {
   void build_rows();
   bool axes_stale_ = false, anchors_stale_ = false;
   CostTerms reduce_costs();
+  // reduce_costs' tile sums into partials_, inside a region; then the sum
+  // of the tiles' (across ranks), after it.
+  void cost_tile_loops();
+  CostTerms sum_cost_tiles();
   // AMRC's hanging particles (ActiveLists::hanging), serial and in a fixed
   // order: the element forces on them into their ends' residuals; residuals
   // back onto them; per-particle results (the gradient, K v, diagonals) onto
   // their ends.
   void hanging_forces(const double* z);
   void hanging_residuals();
+  void hanging_gradient(const double* z, double* grad);
   template <class Own>
   void hanging_into_ends(double* out, Own&& own, double power, double fill);
+  // The same two for vectors in the own numbering (own(h, l, row, v): h's
+  // grid id, its local index).
+  void interpolate_hanging_local(double* x) const;
+  template <class Own>
+  void hanging_into_ends_local(double* out, Own&& own, double power, double fill);
+  // The numbering, the elements' local tables, the hanging links' and the
+  // halo's local indices, for the lists, hanging particles and halo plan now.
+  void build_local(bool exact);
+  void number_elements(bool exact);
+  void map_hanging(bool exact);
+  void map_halo(bool exact);
+  void use_local();  // from now on: held and kept current
+  void fit_local_tables(bool exact);
+  bool local_on_ = false;
+  bool local_stale() const {
+    return local_stamp_ != lists_.stamp || lists_.stamp == 0 || local_hanging_ != lists_.hanging.size() ||
+           local_plan_ != halo_.plan_version();
+  }
+  // Calls f(k, id) for each particle (its k-th) of the element at pos.
+  template <class F>
+  void edge_particles(int64_t s, F&& f) const {
+    f(0, s >> 1);
+    f(1, c_.next[s & 1][s >> 1]);
+  }
+  template <class F>
+  void triple_particles(int64_t s, F&& f) const {
+    f(0, c_.prev[s & 1][s >> 1]);
+    f(1, s >> 1);
+    f(2, c_.next[s & 1][s >> 1]);
+  }
+  template <class F>
+  void cell_particles(int64_t s, F&& f) const {
+    f(0, s);
+    for (int k = 0; k < 3; ++k) f(k + 1, c_.cell[k][s]);
+  }
   void clear_hanging(std::vector<double>& a);
   double window_cost(const double* z, int ic, int jc);
 
@@ -358,6 +454,7 @@ class Evaluator {
   std::vector<double> axis_t_;
   // Each element's band anchor (hysteresis_anchors), in list order too.
   std::vector<double> anc_e_, anc_t_, anc_s_;
+  BandActiveSet active_;  // the elements' branches (off unless track_branches)
   uint64_t derived_stamp_ = 0;  // the lists the axes and anchors were laid out for
   void triple_ids(int64_t s, int64_t pos, int64_t ids[3]) const {
     ids[0] = nb_t_[2 * pos];
@@ -393,6 +490,17 @@ class Evaluator {
   bool asm_pattern_ = false;
   uint64_t rows_stamp_ = 0;
   size_t rows_hanging_ = 0;
+  // The own numbering (LocalNumbering) and, in list order, the local index
+  // of each element's particles (an edge's 2, a triple's 3 in the order
+  // triple_ids gives, a cell's 4 corners): the product reads v there. Per
+  // hanging link, h's, a's and b's; per particle the halo's plan sends and
+  // receives, its index (-1: none). hpend_lo_: hanging_into_ends_local's
+  // results on the way, 3 a local particle (held once there are hanging ones).
+  LocalNumbering local_;
+  std::vector<int32_t> lo_e_, lo_t_, lo_s_, hang_lo_, halo_send_, halo_recv_;
+  std::vector<double> hpend_lo_;
+  uint64_t local_stamp_ = 0, local_plan_ = 0;
+  size_t local_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
@@ -445,22 +553,35 @@ void Evaluator::gather_listed(const GatherRow& row, Add&& add) const {
     if (at[k] >= 0) add(s + at[k]);
 }
 
+template <class FE, class FT, class FS>
+void Evaluator::element_cuts(ListCuts* cuts[6]) {
+  cuts[0] = &cuts_for<FE>(lists_.edges);
+  cuts[1] = &cuts_for<FE>(lists_.ring_edges);
+  cuts[2] = &cuts_for<FT>(lists_.triples);
+  cuts[3] = &cuts_for<FT>(lists_.ring_triples);
+  cuts[4] = &cuts_for<FS>(lists_.shears);
+  cuts[5] = &cuts_for<FS>(lists_.ring_shears);
+}
+
+template <class FE, class FT, class FS>
+void Evaluator::element_loops(FE& fe, FT& ft, FS& fs, ListCuts* const cuts[6]) {
+  const LoopPolicy ring{Schedule::ActiveLists, 1};  // the ring has no tiles
+  // A body that takes positions counts the ring's on after this rank's.
+  item_loops(lists_.edges, pol_, *cuts[0], fe);
+  if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe, lists_.edges.size());
+  item_loops(lists_.triples, pol_, *cuts[2], ft);
+  if (lists_.ring_triples.size() > 0) item_loops(lists_.ring_triples, ring, *cuts[3], ft, lists_.triples.size());
+  item_loops(lists_.shears, pol_, *cuts[4], fs);
+  if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs, lists_.shears.size());
+}
+
 template <class FE, class FT, class FS, class Between, class FP>
 void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
-  const LoopPolicy ring{Schedule::ActiveLists, 1};  // the ring has no tiles
-  ListCuts* cuts[7] = {&cuts_for<FE>(lists_.edges),   &cuts_for<FE>(lists_.ring_edges),
-                       &cuts_for<FT>(lists_.triples), &cuts_for<FT>(lists_.ring_triples),
-                       &cuts_for<FS>(lists_.shears),  &cuts_for<FS>(lists_.ring_shears), nullptr};
+  ListCuts* cuts[7] = {};
+  element_cuts<FE, FT, FS>(cuts);
   if constexpr (!std::is_same_v<FP, std::nullptr_t>) cuts[6] = &cuts_for<FP>(lists_.particles);
   timed_region([&](RegionTime& rt) {
-    // A body that takes positions counts the ring's on after this rank's.
-    item_loops(lists_.edges, pol_, *cuts[0], fe);
-    if (lists_.ring_edges.size() > 0) item_loops(lists_.ring_edges, ring, *cuts[1], fe, lists_.edges.size());
-    item_loops(lists_.triples, pol_, *cuts[2], ft);
-    if (lists_.ring_triples.size() > 0)
-      item_loops(lists_.ring_triples, ring, *cuts[3], ft, lists_.triples.size());
-    item_loops(lists_.shears, pol_, *cuts[4], fs);
-    if (lists_.ring_shears.size() > 0) item_loops(lists_.ring_shears, ring, *cuts[5], fs, lists_.shears.size());
+    element_loops(fe, ft, fs, cuts);
     if constexpr (!std::is_same_v<FP, std::nullptr_t>) {
       const double w0 = omp_get_wtime();
 #pragma omp barrier
@@ -474,10 +595,7 @@ void Evaluator::passes(FE& fe, FT& ft, FS& fs, Between&& between, FP* fp) {
       item_loops(lists_.particles, pol_, *cuts[6], *fp);
     }
   });
-  for (int k : {1, 3, 5}) cuts[k]->rebalance();  // the ring's: active lists always
-  if (pol_.schedule == Schedule::ActiveLists)
-    for (int k : {0, 2, 4, 6})
-      if (cuts[k]) cuts[k]->rebalance();
+  rebalance(cuts, 7);
 }
 
 // Per-particle results at hanging particles (own(h, row, v) computes h's) go to
@@ -509,6 +627,41 @@ inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, d
       }
   for (const HangingLink& g : lists_.hanging)
     for (int k = 0; k < 3; ++k) out[3 * g.h + k] = fill;
+}
+
+// hanging_into_ends in the own numbering: the same sums in the same order.
+template <class Own>
+inline void Evaluator::hanging_into_ends_local(double* out, Own&& own, double power, double fill) {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  if (hl.empty()) return;
+  double* pend = hpend_lo_.data();
+  for (size_t i = 0; i < hl.size(); ++i)
+    for (int e = 0; e < 3; ++e)
+      for (int k = 0; k < 3; ++k) pend[3 * int64_t(hang_lo_[3 * i + e]) + k] = 0.0;
+  for (size_t i = 0; i < hl.size(); ++i) {
+    const HangingLink& g = hl[i];
+    const int64_t lh = hang_lo_[3 * i], la = hang_lo_[3 * i + 1], lb = hang_lo_[3 * i + 2];
+    double v[3];
+    own(g.h, lh, hanging_row(i), v);
+    const double wa = power == 1.0 ? 1 - g.t : std::pow(1 - g.t, power);
+    const double wb = power == 1.0 ? g.t : std::pow(g.t, power);
+    for (int k = 0; k < 3; ++k) {
+      v[k] += pend[3 * lh + k];
+      pend[3 * la + k] += wa * v[k];
+      pend[3 * lb + k] += wb * v[k];
+    }
+  }
+  for (size_t i = 0; i < hl.size(); ++i)
+    for (int e = 1; e < 3; ++e) {
+      const int64_t l = hang_lo_[3 * i + e];
+      const bool is_free = c_.free(e == 1 ? hl[i].a : hl[i].b);
+      for (int k = 0; k < 3; ++k) {
+        if (is_free) out[3 * l + k] += pend[3 * l + k];
+        pend[3 * l + k] = 0.0;
+      }
+    }
+  for (size_t i = 0; i < hl.size(); ++i)
+    for (int k = 0; k < 3; ++k) out[3 * int64_t(hang_lo_[3 * i]) + k] = fill;
 }
 
 }  // namespace drape

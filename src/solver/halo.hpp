@@ -7,6 +7,7 @@
 // reads them at both ends of every element. The MPI version lives in src/decomp/halo_exchange; physics only
 // sees this interface.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace drape {
@@ -25,8 +26,10 @@ class Halo {
   // particles `own`, lists in `ghosts` (ascending) every free particle of
   // another rank within `reach` of one of them, and perhaps some further,
   // and writes their positions into x. From then on, until the next plan or
-  // a new tile plan, exchange (with kPositions) and exchange_particles
-  // refresh them too. Collective over the ranks. One rank: none.
+  // a new tile plan, exchange (with kPositions), exchange_particles and
+  // exchange_at refresh them too (they are in plan()'s lists, and
+  // plan_version() changes with each plan). Collective over the ranks. One
+  // rank: none.
   virtual void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
                             std::vector<int64_t>& ghosts) const {
     (void)own, (void)reach, (void)x;
@@ -36,6 +39,21 @@ class Halo {
   // of its ghosts: the ones some particle of this rank reads) in the
   // exchanges from then on. Collective.
   virtual void keep_contact(const std::vector<int64_t>& kept) const { (void)kept; }
+
+  // Vectors in a rank's own numbering (LocalNumbering: 3 values a
+  // particle, no grid-sized array). plan(f) calls f(id, true) for each
+  // particle an exchange sends, then f(id, false) for each it receives, in
+  // the order exchange_at packs and unpacks them; plan_version() changes
+  // whenever that plan does.
+  virtual void plan(const std::function<void(int64_t, bool)>& f) const { (void)f; }
+  virtual uint64_t plan_version() const { return 0; }
+  // The ghosts' 3 values of `a`: the plan's k-th sent particle is read at
+  // a[3 send_at[k]] (sent as 0 where send_at[k] < 0: this rank holds no
+  // entry for it, so nothing of its own reads it), the k-th received one
+  // written at a[3 recv_at[k]] (dropped where < 0: nothing here reads it).
+  virtual void exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const {
+    (void)a, (void)send_at, (void)recv_at;
+  }
 };
 
 // One rank owning every tile: there are no ghosts.

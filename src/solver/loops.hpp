@@ -58,6 +58,25 @@ void timed_region(Body&& body) {
   c.busy += busy;
 }
 
+// Inside a region: waits for the team, runs f() on the master thread (the
+// one that may call MPI: the library runs FUNNELED), and waits again; the
+// waits count as idle, f's time as serial.
+template <class F>
+void team_serial(RegionTime& rt, F&& f) {
+  const double w0 = omp_get_wtime();
+  double s = 0;
+#pragma omp barrier
+#pragma omp master
+  {
+    const double s0 = omp_get_wtime();
+    f();
+    s = omp_get_wtime() - s0;
+  }
+#pragma omp barrier
+  rt.serial += s;
+  rt.idle += omp_get_wtime() - w0 - s;
+}
+
 // Element-wise loop over [0, n) in equal static chunks.
 template <class F>
 void parallel_for(int64_t n, F&& f) {
@@ -211,25 +230,30 @@ void for_each_item(const ActiveList& list, const LoopPolicy& pol, F&& f, int64_t
   if (pol.schedule == Schedule::ActiveLists) c.rebalance();
 }
 
+// tile_sums' loop, inside a region that is already running (no barrier at
+// the end).
+template <class F>
+void tile_loop(const ActiveList& list, F&& value, double* out) {
+  const int nt = int(list.tile_begin.size()) - 1;
+#pragma omp for schedule(dynamic, 1) nowait
+  for (int t = 0; t < nt; ++t) {
+    double s = 0;
+    for (int64_t k = list.tile_begin[t]; k < list.tile_begin[t + 1]; ++k) {
+      if constexpr (std::is_invocable_v<F&, int64_t, int64_t>)
+        s += value(list.items[k], k);
+      else
+        s += value(list.items[k]);
+    }
+    out[t] = s;
+  }
+}
+
 // Per-tile sums of value(item) (or value(item, k), k the item's place in
 // the list) over each tile's run, in list order: the fixed-order first stage
 // of every reduction. out[t] for owned tile t.
 template <class F>
 void tile_sums(const ActiveList& list, F&& value, double* out) {
-  const int nt = int(list.tile_begin.size()) - 1;
-  timed_region([&] {
-#pragma omp for schedule(dynamic, 1) nowait
-    for (int t = 0; t < nt; ++t) {
-      double s = 0;
-      for (int64_t k = list.tile_begin[t]; k < list.tile_begin[t + 1]; ++k) {
-        if constexpr (std::is_invocable_v<F&, int64_t, int64_t>)
-          s += value(list.items[k], k);
-        else
-          s += value(list.items[k]);
-      }
-      out[t] = s;
-    }
-  });
+  timed_region([&] { tile_loop(list, value, out); });
 }
 
 }  // namespace drape

@@ -14,32 +14,46 @@ NewtonSolver::NewtonSolver(const Cloth& cloth, Minimizer& dots, Preconditioner p
 
 // Sized at the first solve, not with the time loop: a run with the nonlinear
 // CG (or the numeric gradient) never solves, and would hold them for nothing.
-// Every vector holds positions only: the compact ones 3 a row the evaluator
-// has room for (they change when its rows' capacity does, at a mesh change:
-// TimeLoop::mesh_changed calls fit_vectors), the product's operand and K p 3
-// a particle of the grid (the evaluator writes them at the positions of z's
-// layout, which come first).
-void NewtonSolver::size_vectors(const Evaluator& ev) {
-  const size_t nx = size_t(c_.layout.tension()), nc = 3 * ev.row_capacity();
-  if (pg_.size() != nx)
-    for (auto* v : {&pg_, &kp_}) v->assign(nx, 0.0);
-  if (r_.size() == nc && r_.capacity() == nc) return;
-  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_}) {
-    std::vector<double>(nc, 0.0).swap(*v);  // exactly nc: a shrink gives memory back
-  }
+// Every vector holds positions only, in the evaluator's own numbering (the
+// free particles first, in the compact order): d, r, s and the diagonal 3 a
+// row the evaluator has room for, the product's operand p and K p 3 a
+// particle of its numbering's room (the hanging and ghost particles the
+// product reads and writes too). They change when those capacities do, at
+// a mesh change (TimeLoop::mesh_changed calls fit_vectors).
+void NewtonSolver::size_vectors(Evaluator& ev) {
+  ev.numbering();  // held from here on: its room counts
+  const size_t nc = 3 * ev.row_capacity(), nl = 3 * ev.local_capacity();
+  if (r_.size() == nc && r_.capacity() == nc && p_.size() == nl && p_.capacity() == nl) return;
+  for (auto* v : {&d_, &r_, &s_, &dc_}) std::vector<double>(nc, 0.0).swap(*v);  // exactly: a shrink gives memory back
+  for (auto* v : {&p_, &kpc_}) std::vector<double>(nl, 0.0).swap(*v);
 }
 
 void NewtonSolver::release() {
-  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_, &pg_, &kp_}) std::vector<double>().swap(*v);
+  for (auto* v : {&d_, &r_, &s_, &p_, &kpc_, &dc_}) std::vector<double>().swap(*v);
 }
 
 void NewtonSolver::memory(MemoryTable& t) const {
   const char* o = "NewtonSolver";
-  t.add(o, "d, r, s, p, K p, diagonal (compact)",
+  t.add(o, "d, r, s, diagonal (compact); p, K p (own numbering)",
         (d_.capacity() + r_.capacity() + s_.capacity() + p_.capacity() + kpc_.capacity() + dc_.capacity()) *
             sizeof(double));
-  t.add(o, "p, K p (at z's positions)", (pg_.capacity() + kp_.capacity()) * sizeof(double));
   t.add(o, "ids", ids_);
+}
+
+// The compact vectors' row r and the evaluator's own numbering's index r
+// are both the particle list's r-th free particle: checked when the lists
+// change (the product then reads p and writes K p in place).
+void NewtonSolver::check_numbering(const Evaluator& ev) {
+  const ActiveLists& lists = ev.lists();
+  if (numbered_stamp_ == lists.stamp && lists.stamp != 0) return;
+  numbered_stamp_ = lists.stamp;
+  const int64_t* items = lists.particles.items.data();
+  const int64_t n = lists.particles.size();
+  bool same = dots_.unknowns_below(c_.layout.tension()) == 3 * n;
+  dots_.for_each_unknown(c_.layout.tension(), [&](int64_t c, int64_t k) {
+    if (c % 3 == 0 && (c / 3 >= n || items[c / 3] != k / 3)) same = false;
+  });
+  if (!same) throw std::logic_error("NewtonSolver: compact vectors and particle list in different orders");
 }
 
 namespace {
@@ -59,12 +73,7 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
   const uint64_t stamp = pattern_stamp(ev);
   if (ids_.size() != size_t(lists.particles.size()) || stamp != mg_stamp_) {
     ids_.assign(lists.particles.items.begin(), lists.particles.items.end());
-    bool same = true;
-    dots_.for_each_unknown(c_.layout.tension(), [&](int64_t c, int64_t k) {
-      if (c % 3 == 0 && (size_t(c / 3) >= ids_.size() || ids_[size_t(c / 3)] != k / 3)) same = false;
-    });
-    if (!same) throw std::logic_error("NewtonSolver: compact vectors and particle list in different orders");
-    mg_stamp_ = stamp;
+    mg_stamp_ = stamp;  // in the compact order: check_numbering
   }
   ev.assemble_stiffness(k_);
   mg_.setup(k_, ids_, c_.grid.ni, c_.grid.nj, stamp);
@@ -83,26 +92,30 @@ bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
 // Preconditioned CG for K d = -rho. Its vectors are compact: the free
 // particles' positions numbered in tile order (Minimizer::tile_sums' c), so
 // that a coarse mesh's few unknowns lie together in memory instead of one
-// triple per cache line. Only the product's operand, its result and the
-// diagonal live at z's indices (pg_, kp_): the evaluator's kernels
-// read and write particles there. The preconditioner: the diagonal (each
-// particle's three entries scaled by its block's trace / 3), or one
-// multigrid V-cycle on K assembled.
+// triple per cache line. The product's operand p and its result K p (and
+// the diagonal, first) run on past the free particles into the hanging and
+// ghost ones of the evaluator's own numbering, which the product reads and
+// writes. The preconditioner: the diagonal (each particle's three entries
+// scaled by its block's trace / 3), or one multigrid V-cycle on K assembled.
 // Stops at |r| <= rel_tol |b| or after `budget` iterations; returns the count.
 int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol,
                                Timers& tm) {
   size_vectors(ev);
-  double *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(), *kpc = kpc_.data(),
-         *dc = dc_.data(), *pg = pg_.data(), *kp = kp_.data();
-  // The diagonal at z's indices lands in K p's vector: it is read once, into
-  // dc, before the first product overwrites it.
+  check_numbering(ev);
+  double *d = d_.data(), *r = r_.data(), *s = s_.data(), *p = p_.data(), *kp = kpc_.data(),
+         *dc = dc_.data();
+  // Past the free particles p is read, never updated: hanging and ghost
+  // entries are interpolated and received, every other one (a clamped
+  // particle's) must be 0. The diagonal lands in K p's vector: it is read
+  // once, into dc, before the first product overwrites it.
+  std::fill(p_.begin() + 3 * ev.lists().particles.size(), p_.end(), 0.0);
   double* diag = kp;
   const double* rho = ev.residual().data();  // in the compact order
   const int64_t end = c_.layout.tension();
   const bool mg = pc_ == Preconditioner::Multigrid;
   {
     ScopedPhase ph(tm, kScaling);
-    ev.stiffness_diagonal(z, diag);
+    ev.stiffness_diagonal_local(z, diag);
     if (mg && multigrid_stale(ev)) {
       setup_multigrid(ev);
       mg_solves_ = 0;
@@ -113,14 +126,13 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   if (!mg) {
     ScopedPhase ph(tm, kVector);
     double sums[2];  // b.b, r.s with b = -rho: one pass, the diagonal's s on the way
-    dots_.tile_sums<2>(end, [&](int64_t c, int64_t k, double* acc) {
+    dots_.compact_sums<2>(end, [&](int64_t c, double* acc) {
       const double b = -rho[c];
-      dc[c] = diag[k];
+      dc[c] = diag[c];
       d[c] = 0;
       r[c] = b;
       s[c] = r[c] / dc[c];
       p[c] = s[c];
-      pg[k] = p[c];
       acc[0] += b * b;
       acc[1] += r[c] * s[c];
     }, sums);
@@ -130,7 +142,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     double bb;
     {
       ScopedPhase ph(tm, kVector);
-      dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+      dots_.compact_sums<1>(end, [&](int64_t c, double* acc) {
         const double b = -rho[c];
         d[c] = 0;
         r[c] = b;
@@ -142,9 +154,8 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
       mg_.apply(r, s);
     }
     ScopedPhase ph(tm, kVector);
-    dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
+    dots_.compact_sums<1>(end, [&](int64_t c, double* acc) {
       p[c] = s[c];
-      pg[k] = p[c];
       acc[0] += r[c] * s[c];
     }, &rs);
     target = rel_tol * rel_tol * bb;
@@ -153,28 +164,25 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
   while (it < budget) {
     {
       ScopedPhase g(tm, kGradient);  // one stiffness product: a gradient's worth of work
-      ev.stiffness_product(z, pg, kp);
+      ev.stiffness_product_local(z, p, kp);
     }
     double sums[2];  // r.r, r.s
     {
       ScopedPhase ph(tm, kVector);
       double pkp;
-      dots_.tile_sums<1>(end, [&](int64_t c, int64_t k, double* acc) {
-        kpc[c] = kp[k];
-        acc[0] += p[c] * kpc[c];
-      }, &pkp);
+      dots_.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += p[c] * kp[c]; }, &pkp);
       if (!(pkp > 0)) break;  // K is positive definite by construction; guard anyway
       const double a = rs / pkp;
       if (mg)  // the step, the residual and its norm; s from the V-cycle below
         dots_.compact_sums<1>(end, [&](int64_t c, double* acc) {
           d[c] += a * p[c];
-          r[c] -= a * kpc[c];
+          r[c] -= a * kp[c];
           acc[0] += r[c] * r[c];
         }, sums);
       else  // one pass: with the diagonal's s and both dot products (s wasted on the last iteration only)
         dots_.compact_sums<2>(end, [&](int64_t c, double* acc) {
           d[c] += a * p[c];
-          r[c] -= a * kpc[c];
+          r[c] -= a * kp[c];
           s[c] = r[c] / dc[c];
           acc[0] += r[c] * r[c];
           acc[1] += r[c] * s[c];
@@ -194,10 +202,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     const double rs1 = sums[1];
     const double beta = rs1 / rs;
     rs = rs1;
-    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) {
-      p[c] = s[c] + beta * p[c];
-      pg[k] = p[c];
-    });
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t) { p[c] = s[c] + beta * p[c]; });
   }
   if (mg) {
     if (mg_solves_++ == 0) mg_first_ = it;
@@ -217,12 +222,12 @@ double NewtonSolver::slope(const Evaluator& ev) {
   return g;
 }
 
-// SlopeSearch's trials from a = 1: true with z at the accepted one (its cost
-// in res.cost and c0). False when its trials ran out or the direction does
+// SlopeSearch's trials from a = 1 (g0: the slope at z): true with z at the
+// accepted one (its cost in res.cost and c0). False when its trials ran out or the direction does
 // not descend; z is then at some trial, and the caller backtracks.
 template <class Trial>
-bool NewtonSolver::slope_search(Evaluator& ev, Trial&& trial, CgResult& res, double& c0) {
-  SlopeSearch search(slope(ev));
+bool NewtonSolver::slope_search(Evaluator& ev, double g0, Trial&& trial, CgResult& res, double& c0) {
+  SlopeSearch search(g0);
   if (!search.usable()) return false;
   double a = 1.0;
   for (int t = 0; t < SlopeSearch::kTrials && a > 0; ++t) {
@@ -240,10 +245,50 @@ bool NewtonSolver::slope_search(Evaluator& ev, Trial&& trial, CgResult& res, dou
   return false;
 }
 
+// The active-set rounds (BandActiveSet): the full step is tried; while its
+// slope is not within SlopeSearch::kAccept of the slope at z (it over- or
+// undershoots, the bands' kinks crossed on the wrong tangent), z is
+// evaluated again, the elements that landed on another branch take their
+// secant stiffness, and the step is solved again, at most kKinkRounds times.
+// Global decisions from fixed-order sums only (the slopes): every rank takes
+// the same rounds. Returns the slope at z along the final direction; the
+// line search follows, its first trial (a = 1) the last round's, kept.
+template <class Trial>
+double NewtonSolver::through_kinks(Evaluator& ev, double* z, double g0, Trial&& trial, double& last_a,
+                                   CgResult& res, const CgSettings& st, double eta, Timers& tm) {
+  constexpr int kKinkRounds = 2;
+  const int64_t end = c_.layout.tension();
+  double* zt = r_.data();
+  ev.branches().next_iteration();
+  for (int round = 0; round < kKinkRounds && res.iterations < st.max_iterations; ++round) {
+    trial(1.0);
+    if (std::fabs(slope(ev)) <= SlopeSearch::kAccept * std::fabs(g0)) break;
+    // Back to z: its residual and kept numbers, then the landed branches' slopes.
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c]; });
+    ev.branches().at_z();
+    {
+      ScopedPhase ph(tm, kLineSearch);
+      ++res.evaluations;
+      ev.settled_cost(z);
+      last_a = -1;  // the kept trial is not where the evaluator is
+    }
+    ev.kink_tangents();
+    const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
+    res.iterations += std::max(1, used);
+    // The solve used the positions' save as its residual: z holds them.
+    dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
+    g0 = slope(ev);
+  }
+  return g0;
+}
+
 CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
                                 const std::function<void(int, double)>& on_iteration) {
   const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
   CgResult res;
+  // Branches noted at z's slot first (BandActiveSet), the trials' beside them.
+  const bool kinks = st.active_set && ev.branches().enabled();
+  if (kinks) ev.branches().at_z();
   {
     ScopedPhase ph(tm, kGradient);
     res.cost = ev.settled_cost(z);
@@ -277,13 +322,23 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     // free particles' positions are saved and restored (a whole-array copy
     // would cost the finest mesh's price on a coarse one).
     dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { zt[c] = z[k]; });
+    double g0 = kinks || st.slope_search ? slope(ev) : 0.0;
+    // The last trial's step and cost: the active-set rounds' last full step
+    // is the line search's first trial (z and the evaluator still there).
+    double last_a = -1;
+    CostTerms last;
     auto trial = [&](double a) {
+      if (a == last_a) return last;
       ScopedPhase ph(tm, kLineSearch);
       dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c] + a * scale * d_[c]; });
       ++res.evaluations;
-      return ev.settled_cost(z);
+      if (kinks) ev.branches().at_trial();
+      last = ev.settled_cost(z);
+      last_a = a;
+      return last;
     };
-    bool accepted = st.slope_search && slope_search(ev, trial, res, c0);
+    if (kinks) g0 = through_kinks(ev, z, g0, trial, last_a, res, st, eta, tm);
+    bool accepted = st.slope_search && slope_search(ev, g0, trial, res, c0);
     for (double a = 1.0; !accepted && a > 1e-4; a *= 0.5) {
       const CostTerms t = trial(a);
       if (std::isfinite(t.total()) && t.total() < c0) {
@@ -292,6 +347,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
         accepted = true;
       }
     }
+    if (accepted && kinks) ev.branches().accept_trial();  // the last trial evaluated
     if (!accepted) {
       // Back to where the line search began; z's residual buffers with it.
       dots_.for_each_unknown(end, [&](int64_t c, int64_t k) { z[k] = zt[c]; });

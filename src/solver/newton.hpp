@@ -6,7 +6,9 @@
 // condition number of K, not its square as for CG on a least-squares cost
 // (docs/design.md §6). The line search: backtracking on the cost, each
 // accepted step a decrease, or (CgSettings::slope_search) regula falsi on the
-// step's energy slope along the direction (solver/slope_search.hpp).
+// step's energy slope along the direction (solver/slope_search.hpp); before
+// either, optionally, a re-solve with the tangent of the band branches the
+// full step lands on (solver/band_active_set.hpp).
 #include <functional>
 #include <vector>
 
@@ -47,7 +49,7 @@ class NewtonSolver {
   void release();
   // After a mesh change, between steps: the compact vectors follow the
   // evaluator's row capacity, if they are held (else the first solve sizes them).
-  void fit_vectors(const Evaluator& ev) {
+  void fit_vectors(Evaluator& ev) {
     if (!r_.empty()) size_vectors(ev);
   }
 
@@ -55,20 +57,25 @@ class NewtonSolver {
   void setup_multigrid(Evaluator& ev);
   double slope(const Evaluator& ev);
   template <class Trial>
-  bool slope_search(Evaluator& ev, Trial&& trial, CgResult& res, double& c0);
+  bool slope_search(Evaluator& ev, double g0, Trial&& trial, CgResult& res, double& c0);
+  template <class Trial>
+  double through_kinks(Evaluator& ev, double* z, double g0, Trial&& trial, double& last_a, CgResult& res,
+                       const CgSettings& st, double eta, Timers& tm);
   bool multigrid_stale(const Evaluator& ev) const;
 
   const Cloth& c_;
   Minimizer& dots_;
   // Compact (Minimizer::for_each_unknown's c): the step, residual, scaled
-  // residual, direction, K p and diagonal; r_ holds the positions before
-  // the line search's trials between solves. 3 per row of the evaluator's
-  // (its free and hanging particles' capacity: this rank's, on this mesh).
+  // residual and diagonal; r_ holds the positions before the line search's
+  // trials between solves. 3 per row of the evaluator's (its free and
+  // hanging particles' capacity: this rank's, on this mesh). The direction
+  // p and K p (the diagonal before the first product) in the evaluator's
+  // own numbering, whose first rows are the compact ones: 3 per particle of
+  // its room (Evaluator::local_capacity).
   std::vector<double> d_, r_, s_, p_, kpc_, dc_;
-  // At z's position indices: the direction for the product, K p (and the
-  // diagonal before the first product).
-  std::vector<double> pg_, kp_;
-  void size_vectors(const Evaluator& ev);
+  void size_vectors(Evaluator& ev);
+  void check_numbering(const Evaluator& ev);
+  uint64_t numbered_stamp_ = 0;
   Preconditioner pc_;
   BlockMatrix k_;   // K assembled (multigrid's finest level)
   Multigrid mg_;

@@ -67,6 +67,7 @@ struct SolverSpec {
   Preconditioner preconditioner = Preconditioner::Jacobi;
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
   bool slope_line_search = false;  // Newton's line search on the energy slope (else backtracking on the cost)
+  bool band_active_set = false;  // Newton: re-solve a step with the tangent of the band branches it lands on
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
   double drag = 0.0;            // 1/s: air drag -drag*m*v in each particle's Newton equation
   double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)

@@ -234,13 +234,7 @@ void SelfContact::add_jtr(int64_t p, const double* x, const double* r, double* j
 }
 
 void SelfContact::add_product(int64_t p, const double* x, const double* v, double* out) const {
-  for_partners(p, [&](int64_t q) {
-    PairTerm t;
-    if (!term(x, p, q, t)) return;
-    double nv = 0;
-    for (int i = 0; i < 3; ++i) nv += t.n[i] * (v[3 * p + i] - v[3 * q + i]);
-    for (int i = 0; i < 3; ++i) out[i] += t.slope * nv * t.n[i];
-  });
+  add_product(p, x, v + 3 * p, [v](int64_t q) { return v + 3 * q; }, out);
 }
 
 double SelfContact::slope_sum(int64_t p, const double* x) const {

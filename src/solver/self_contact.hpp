@@ -68,6 +68,19 @@ class SelfContact {
   // K's part at p (its positive semi-definite normal term): sum over pairs
   // of slope n n^T (v_p - v_q), added to out.
   void add_product(int64_t p, const double* x, const double* v, double* out) const;
+  // The same with v in another numbering: vp is p's 3 values, v_of(q) a
+  // partner's.
+  template <class VOf>
+  void add_product(int64_t p, const double* x, const double* vp, VOf&& v_of, double* out) const {
+    for_partners(p, [&](int64_t q) {
+      PairTerm t;
+      if (!term(x, p, q, t)) return;
+      const double* vq = v_of(q);
+      double nv = 0;
+      for (int i = 0; i < 3; ++i) nv += t.n[i] * (vp[i] - vq[i]);
+      for (int i = 0; i < 3; ++i) out[i] += t.slope * nv * t.n[i];
+    });
+  }
   // Sum of the pairs' slopes at p (the trace of K's diagonal block).
   double slope_sum(int64_t p, const double* x) const;
   // K's blocks of row p: block(q, b) with b = slope n n^T for q = p and -b
@@ -94,6 +107,7 @@ class SelfContact {
   // The last build's contact ghosts that are partners (other ranks'
   // particles whose values this rank reads until the next build).
   int64_t contact_ghosts() const { return int64_t(kept_.size()); }
+  const std::vector<int64_t>& ghost_partners() const { return kept_; }  // those, ascending
   void memory(MemoryTable& t) const;
 
  private:

@@ -127,10 +127,11 @@ void Evaluator::add_friction_product(int64_t p, const double* z, const double* v
   for (int i = 0; i < 3; ++i) out[i] += blk[3 * i] * vp[0] + blk[3 * i + 1] * vp[1] + blk[3 * i + 2] * vp[2];
 }
 
-void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
+void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) {
   list_rows();
-  halo_.exchange(v, Halo::kPositions);
-  interpolate_hanging(v);  // K acts on P v: hanging entries follow their ends
+  use_local();
+  halo_.exchange_at(v, halo_send_.data(), halo_recv_.data());
+  interpolate_hanging_local(v);  // K acts on P v: hanging entries follow their ends
   // What depends on z alone (edges' lengths and directions, triples' and
   // cells' strain gradients and slope factors, particles' contact terms):
   // kept by the diagonal (from settled_cost's pass in Newton's order), or
@@ -138,29 +139,32 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   // for bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
   auto edge = [&](int64_t s, int64_t pos) {
-    const int64_t p = s >> 1, q = nb_e_[pos];
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (fill) {
+      const int64_t p = s >> 1, q = nb_e_[pos];
       const V e = at(z, q) - at(z, p);
       edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / c_.edge_rest[s],
                 c_.edge_width[s], ke);
     }
     V out[2];
-    edge_product(ke, at(v, q) - at(v, p), out);
+    edge_product(ke, at(v, lo_e_[2 * pos + 1]) - at(v, lo_e_[2 * pos]), out);
     for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], out[k]);
   };
+  // The grid ids (z's) only where the z-only numbers are computed: the
+  // operand's reads go through the own numbering's tables.
   auto triple = [&](int64_t s, int64_t pos) {
-    int64_t ids[3];
-    triple_ids(s, pos, ids);
     double mine[kKgTriple];
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (fill) {
+      int64_t ids[3];
+      triple_ids(s, pos, ids);
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
       kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, 3, kg);
     }
-    const V vk[3] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2])};
+    const int32_t* l = &lo_t_[3 * pos];
+    const V vk[3] = {at(v, l[0]), at(v, l[1]), at(v, l[2])};
     V out[3];
     kept_gradient_product<3>(kg, vk, out);
     for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], out[k]);
@@ -168,15 +172,16 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
   auto shear = [&](int64_t s, int64_t pos) {
     double mine[kKgCell];
     double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
-    int64_t ids[4];
-    cell_ids(s, pos, ids);
     if (fill) {
+      int64_t ids[4];
+      cell_ids(s, pos, ids);
       const CellAt a = cell_at(ids, z);
       V g[4];
       shear_cell<double, false>(a.x, g);
       kept_gradients(c_.shear_area[s] * k_slope_s_[pos], g, 4, kg);
     }
-    const V vk[4] = {at(v, ids[0]), at(v, ids[1]), at(v, ids[2]), at(v, ids[3])};
+    const int32_t* l = &lo_s_[4 * pos];
+    const V vk[4] = {at(v, l[0]), at(v, l[1]), at(v, l[2]), at(v, l[3])};
     V out[4];
     kept_gradient_product<4>(kg, vk, out);
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], out[k]);
@@ -193,7 +198,7 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
     double mine[kKc];
     const double* fc = contact_at(p, size_t(pos), mine);
     const double fn = fc[3], slope = fc[4];
-    const double* vp = v + 3 * p;
+    const double* vp = v + 3 * pos;  // the free particles come first, in list order
     double out[3];
     for (int k = 0; k < 3; ++k) out[k] = fc[5] * vp[k];
     if (fn > 0) {  // slope * n (n.v); n from the force direction
@@ -201,20 +206,21 @@ void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
     }
     add_friction_product(p, z, vp, out);
-    if (m_.self_contact) self_.add_product(p, z, v, out);
+    if (m_.self_contact)  // partners: free here, or contact ghosts (numbered with the others)
+      self_.add_product(p, z, vp, [&](int64_t q) { return v + 3 * local_.index_of(q); }, out);
     gather_listed(rows_[pos], [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
       out[2] += c[2];
     });
-    for (int k = 0; k < 3; ++k) kv[3 * p + k] = out[k];
+    for (int k = 0; k < 3; ++k) kv[3 * pos + k] = out[k];
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
-  hanging_into_ends(kv, [&](int64_t h, const GatherRow& row, double* out) {  // P^T K P: no mass at h
+  hanging_into_ends_local(kv, [&](int64_t h, int64_t lh, const GatherRow& row, double* out) {  // P^T K P: no mass at h
     double mine[kKc];
     const double* fc = contact_at(h, size_t(&row - rows_.data()), mine);
     const double fn = fc[3], slope = fc[4];
-    const double* vh = v + 3 * h;
+    const double* vh = v + 3 * lh;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
     for (int k = 0; k < 3; ++k) out[k] = fn > 0 ? slope * nv * fc[k] / fn : 0.0;
     add_friction_product(h, z, vh, out);
@@ -266,12 +272,16 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // time), else computed here; either way they and the particles' contact
 // numbers stay kept (keep_products), so that no product computes anything
 // but itself.
-void Evaluator::stiffness_diagonal(const double* z, double* diag) {
+void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   list_rows();
   // At a z no evaluation saw (Newton's order never does that), a new pair
   // list's contact ghosts need their positions: z's ghost entries are a
   // copy of other ranks' values, refreshed as the other entry points do.
   if (refresh_pairs(z)) halo_.exchange(const_cast<double*>(z), Halo::kPositions);
+  use_local();
+  // A new pair list changes the halo's plan (its contact ghosts): the
+  // numbering follows, before any product reads it.
+  if (local_stale()) build_local(false);
   k_z_ = z;
   const bool settled = settled_;
   auto edge = [&](int64_t s, int64_t pos) {
@@ -307,10 +317,10 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(p, z) / 3;
     gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
-    for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
+    for (int k = 0; k < 3; ++k) diag[3 * pos + k] = dsum;
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
-  hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* out) {
+  hanging_into_ends_local(diag, [&](int64_t h, int64_t, const GatherRow& row, double* out) {
     double mine[kKc];
     const double* kc = contact_at(h, size_t(&row - rows_.data()), mine);
     double dsum = kc[4] / 3;
@@ -319,6 +329,32 @@ void Evaluator::stiffness_diagonal(const double* z, double* diag) {
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);
   kg_ready_ = keep_;
+}
+
+// The grid-layout forms (tests, tools): v copied into the own numbering,
+// the results back to the free and hanging particles' entries (and v's
+// interpolated and received entries back to v).
+void Evaluator::stiffness_product(const double* z, double* v, double* kv) {
+  const LocalNumbering& ln = numbering();
+  const int64_t n = ln.size(), listed = ln.free_count() + int64_t(lists_.hanging.size());
+  std::vector<double> vl(3 * size_t(n)), kl(3 * size_t(n), 0.0);
+  for (int64_t l = 0; l < n; ++l)
+    for (int k = 0; k < 3; ++k) vl[3 * l + k] = v[3 * ln.id_of(l) + k];
+  stiffness_product_local(z, vl.data(), kl.data());
+  for (int64_t l = 0; l < n; ++l)
+    for (int k = 0; k < 3; ++k) {
+      v[3 * ln.id_of(l) + k] = vl[3 * l + k];
+      if (l < listed) kv[3 * ln.id_of(l) + k] = kl[3 * l + k];
+    }
+}
+
+void Evaluator::stiffness_diagonal(const double* z, double* diag) {
+  const LocalNumbering& ln = numbering();
+  const int64_t listed = ln.free_count() + int64_t(lists_.hanging.size());
+  std::vector<double> dl(3 * size_t(ln.size()), 0.0);
+  stiffness_diagonal_local(z, dl.data());
+  for (int64_t l = 0; l < listed; ++l)
+    for (int k = 0; k < 3; ++k) diag[3 * ln.id_of(l) + k] = dl[3 * l + k];
 }
 
 }  // namespace drape

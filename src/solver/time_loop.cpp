@@ -18,6 +18,7 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
       ev_(cloth, model, lists, tiling, policy, red, halo), cg_(cloth, lists, tiling, red),
       newton_(cloth, cg_, spec.preconditioner) {
   fit_saved(true);
+  if (spec.method == SolverMethod::Newton && spec.band_active_set) ev_.track_branches(true);
   free_ = red.sum_i64(lists.particles.size());
 }
 
@@ -217,6 +218,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   cs.numeric = spec_.gradient == GradientMode::Numeric;
   cs.free_particles = free_;
   cs.slope_search = spec_.slope_line_search;
+  cs.active_set = spec_.band_active_set;
   // A one-pointer capture: no allocation, whatever stop_requested holds.
   cs.stop_requested = [this] { return stop_requested && stop_requested(); };
   CgResult r;

@@ -1,7 +1,8 @@
 #pragma once
-// The solvers' arrays that still follow the grid, by name: the product's operand and result at z's indices, and
-// what only a gradient (the nonlinear CG's), AMRC's hanging particles or
-// K's assembly hold. Every other array of the evaluator's, Newton's and the
+// The solvers' arrays that still follow the grid, by name: what only a
+// gradient (the nonlinear CG's), AMRC's hanging particles' forces or K's
+// assembly hold. Newton's product vectors are in the evaluator's own
+// numbering and checked like the rest. Every other array of the evaluator's, Newton's and the
 // time loop's tables holds this rank's listed elements, rows or unknowns
 // (test_memory, test_mpi_memory_np2 check it).
 #include <map>
@@ -18,7 +19,6 @@ inline bool follows_the_grid(const MemoryTable::Row& r) {
       "Evaluator: hanging particles' forces and results",
       "Evaluator: assembly maps",
       "Evaluator: numeric gradient's copy of z",
-      "NewtonSolver: p, K p (at z's positions)",
       "Minimizer: g, g new, s, d, zt, diagonal (nonlinear CG)",
   };
   const std::string key = r.owner + ": " + r.array;

@@ -8,6 +8,7 @@
 
 #include <type_traits>
 
+#include "solver/elements/angle_K.hpp"
 #include "solver/elements/lanes.hpp"
 #include "solver/elements/v3.hpp"
 
@@ -85,8 +86,14 @@ inline T shear_angle_of(const T s[4], const T co[4]) {
   using std::atan2;
   const T pr = s[0] * s[1] + co[0] * co[1], pi = co[0] * s[1] - s[0] * co[1];  // z0 conj(z1)
   const T qr = s[3] * s[2] + co[3] * co[2], qi = co[3] * s[2] - s[3] * co[2];  // z3 conj(z2)
-  if (value(pr) > 0 && value(qr) > 0) return T(0.25) * atan2(pr * qi + pi * qr, pr * qr - pi * qi);
-  return T(0.25) * (atan2(pi, pr) + atan2(qi, qr));
+  auto angle = [](const T& y, const T& x) {
+    if constexpr (std::is_same_v<T, double>)
+      return turn_atan2(y, x);  // angle_K.hpp: the kernels' atan2
+    else
+      return atan2(y, x);
+  };
+  if (value(pr) > 0 && value(qr) > 0) return T(0.25) * angle(pr * qi + pi * qr, pr * qr - pi * qi);
+  return T(0.25) * (angle(pi, pr) + angle(qi, qr));
 }
 
 // The corners one after another (any scalar: Dual too).

@@ -5,7 +5,9 @@
 // kernels take Dual too: bend_gradient on duals is the tests' reference for
 // the hand-derived bend_gradient_hv.
 #include <cmath>
+#include <type_traits>
 
+#include "solver/elements/angle_K.hpp"
 #include "solver/elements/lanes.hpp"
 #include "solver/elements/v3.hpp"
 
@@ -37,10 +39,14 @@ inline void bend_terms(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<
 }
 template <class T>
 inline T bend_angle(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3]) {
-  using std::atan2;
   T s, co;
   bend_terms(a, b, c, n, g, s, co);
-  return atan2(s, co);
+  if constexpr (std::is_same_v<T, double>) {
+    return turn_atan2(s, co);  // as the four-lane pass's (angle_K.hpp)
+  } else {
+    using std::atan2;
+    return atan2(s, co);
+  }
 }
 template <class T>
 inline void bend_gradient(const V3<T>& a, const V3<T>& b, const V3<T>& c, const V3<T>& n, V3<T> g[3]) {

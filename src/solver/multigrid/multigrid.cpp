@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace drape {
 
@@ -23,9 +24,19 @@ void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
     }
     if (coarse.empty() || coarse.size() == levels_.back().ids.size()) break;
     levels_.back().stride = stride;
-    levels_.back().smoothed =
-        s_.interpolation != Interpolation::Bilinear && int(levels_.size()) <= s_.smoothed_levels;
-    levels_.back().P0 = make_prolongation(levels_.back().ids, coarse, ni, nj, stride, scratch);
+    Level& F = levels_.back();
+    const int altered_levels = s_.interpolation == Interpolation::Fitted && s_.fit_cycles > 0 ? 1 : s_.smoothed_levels;
+    const bool altered = s_.interpolation != Interpolation::Bilinear && int(levels_.size()) <= altered_levels;
+    F.smoothed = altered && s_.interpolation == Interpolation::Smoothed;
+    F.fitted = altered && s_.interpolation == Interpolation::Fitted;
+    F.P0 = make_prolongation(F.ids, coarse, ni, nj, stride, scratch);
+    if (F.fitted) {
+      F.P = fitted_pattern(F.ids, coarse, ni, nj, stride, s_.fit_wide, scratch);
+      for (size_t k = 0; k < F.ids.size(); ++k) scratch[F.ids[k]] = int32_t(k);
+      F.fine_row.clear();
+      for (int64_t p : coarse) F.fine_row.push_back(scratch[p]);
+      for (int64_t p : F.ids) scratch[p] = -1;
+    }
     levels_.emplace_back();
     levels_.back().ids = std::move(coarse);
     stride *= 2;
@@ -47,6 +58,8 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
   a0_ = &A0;
   const bool fresh = stamp != stamp_ || stamp == 0 || A0.rows != rows_;
   if (fresh) build_levels(ids, ni, nj);
+  ni_ = ni;
+  nj_ = nj;
   stamp_ = stamp;
   rows_ = A0.rows;
   const int last = levels() - 1;
@@ -59,11 +72,57 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
       if (s_.smoothing == Smoothing::Point || L.smoothed) L.smoother.setup(matrix(l), s_.degree, s_.ratio);
       if (L.smoothed)
         smooth_prolongation(matrix(l), L.smoother.dinv(), L.smoother.estimate(), L.P0, L.AP0, L.P, fresh);
+      if (L.fitted) fit(l);
     } else {
       coarse_.factor(matrix(l), fresh);
     }
     stats_[l].blocks = matrix(l).blocks();
     stats_[l].setup_seconds += omp_get_wtime() - t0;
+  }
+}
+
+// Level l's test vectors (pseudo-random on the finest fitted level, else
+// the level above's on these points), relaxed on A e = 0 with a cold
+// eigenvalue estimate (nothing carried from earlier builds: restarts stay
+// bitwise), fitted; their values on the coarse points start the next level's.
+void Multigrid::fit(int l) {
+  Level& L = levels_[l];
+  const BlockMatrix& A = matrix(l);
+  if (l == 0 || !levels_[l - 1].fitted) random_vectors(A.rows, s_.fit_vectors, L.tests);
+  if (s_.fit_cycles > 0 && l == 0) {
+    cycle_vectors(A);
+  } else {
+    L.relax.forget();
+    L.relax.setup(A, s_.fit_sweeps, s_.fit_ratio);
+    relax_vectors(A, L.relax, s_.fit_vectors, L.tests, L.zero);
+  }
+  fit_prolongation(A, L.P0, L.fine_row, s_.fit_vectors, L.tests, s_.fit_tikhonov, s_.fit_keep_sums, s_.fit_full_blocks, L.P);
+  Level& C = levels_[l + 1];
+  if (C.fitted) inject_vectors(L.fine_row, A.rows, s_.fit_vectors, L.tests, C.tests);
+}
+
+// The finest level's test vectors relaxed by e <- e - M^-1 A e with the
+// bilinear cycle M, fit_cycles times, then scaled to unit mean square.
+void Multigrid::cycle_vectors(const BlockMatrix& A) {
+  if (!probe_) probe_ = std::make_unique<Multigrid>();
+  MultigridSettings b = s_;
+  b.interpolation = Interpolation::Bilinear;
+  probe_->set_settings(b);
+  probe_->setup(A, levels_[0].ids, ni_, nj_, 0);
+  Level& L = levels_[0];
+  const int64_t m = 3 * A.rows;
+  std::vector<double> ae(size_t(m), 0.0), c(size_t(m), 0.0);
+  for (int k = 0; k < s_.fit_vectors; ++k) {
+    double* e = &L.tests[size_t(k) * m];
+    for (int it = 0; it < s_.fit_cycles; ++it) {
+      A.multiply(e, ae.data());
+      probe_->apply(ae.data(), c.data());
+      for (int64_t i = 0; i < m; ++i) e[i] -= c[i];
+    }
+    double s = 0;
+    for (int64_t i = 0; i < m; ++i) s += e[i] * e[i];
+    const double scale = s > 0 ? std::sqrt(double(m) / s) : 0.0;
+    for (int64_t i = 0; i < m; ++i) e[i] *= scale;
   }
 }
 

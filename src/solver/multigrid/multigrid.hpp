@@ -7,10 +7,12 @@
 // symmetric positive definite operator, as linear CG needs. Everything sums
 // in fixed orders: the same result on any thread count.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "solver/multigrid/block_matrix.hpp"
 #include "solver/multigrid/coarse_solve.hpp"
+#include "solver/multigrid/fitted_prolongation.hpp"
 #include "solver/multigrid/line_smoother.hpp"
 #include "solver/multigrid/smoothed_prolongation.hpp"
 #include "solver/multigrid/smoother.hpp"
@@ -19,9 +21,10 @@
 namespace drape {
 
 // How a coarse level's correction reaches the level above: bilinear
-// interpolation of the displacements (P0), or P0 smoothed by one damped
-// block-Jacobi step in the fine operator (smoothed_prolongation.hpp).
-enum class Interpolation { Bilinear, Smoothed };
+// interpolation of the displacements (P0), P0 smoothed by one damped
+// block-Jacobi step in the fine operator (smoothed_prolongation.hpp), or
+// weights fitted to vectors the smoother reduces slowly (fitted_prolongation.hpp).
+enum class Interpolation { Bilinear, Smoothed, Fitted };
 // The levels' smoother: Chebyshev on the point (3 x 3 block) diagonal, or
 // block-line Gauss-Seidel along i and j (line_smoother.hpp), robust where K
 // couples one grid direction much more strongly than the other.
@@ -32,7 +35,21 @@ struct MultigridSettings {
   double ratio = 10;          // the smoother damps D^-1 A's spectrum above lmax / ratio
   int64_t coarsest = 100;     // particles at most on the directly solved level
   Interpolation interpolation = Interpolation::Bilinear;  // the faster on the drape (set-up included)
-  int smoothed_levels = 1000;  // the finest levels whose P is smoothed (the coarse operators widen with each)
+  int smoothed_levels = 1000;  // the finest levels whose P is smoothed or fitted (the coarse operators widen with each)
+  // Fitted interpolation: test vectors, the degree of the Chebyshev
+  // relaxation of A e = 0 that makes them, over [lmax / fit_ratio, lmax],
+  // the wide stencil (6 coarse neighbours where P0 has 2), the pull towards
+  // P0, whether P's rows keep P0's sums (translations) exactly.
+  int fit_vectors = 8;
+  int fit_sweeps = 30;  // 10 left the twisted Laplacian's vectors rough (37, 60 iterations at 33, 65 against 13, 12)
+  double fit_ratio = 30;
+  bool fit_wide = false;  // the wide fit is worse conditioned (16 against 12 iterations there)
+  double fit_tikhonov = 1e-3;
+  bool fit_keep_sums = true;
+  bool fit_full_blocks = false;  // components from each other's values too (else diagonal blocks)
+  // > 0: the test vectors are relaxed by this many V-cycles with the
+  // bilinear P (the modes the cycle leaves) and only the finest P is fitted.
+  int fit_cycles = 0;
   Smoothing smoothing = Smoothing::Point;
   int line_sweeps = 1;  // line smoothing: sweeps (i-lines, then j-lines) before and after the coarse correction
 };
@@ -76,24 +93,31 @@ class Multigrid {
     int stride = 1;
     BlockMatrix A;             // P^T A P of the level above (level 0: a0_)
     Prolongation P0;           // bilinear, from the next level down to this one
-    Prolongation P;            // P0 smoothed (where `smoothed`)
+    Prolongation P;            // P0 smoothed (where `smoothed`) or fitted (where `fitted`)
     BlockMatrix AP0, AP;       // A P0 and A P: the products' workspaces
-    bool smoothed = false;
-    const Prolongation& transfer() const { return smoothed ? P : P0; }
+    bool smoothed = false, fitted = false;
+    const Prolongation& transfer() const { return smoothed || fitted ? P : P0; }
     Chebyshev smoother;
+    Chebyshev relax;                 // fitted: the test vectors' relaxation
+    std::vector<int64_t> fine_row;   // fitted: the next level's points' rows here
+    std::vector<double> tests, zero;  // fitted: the test vectors on this level
     LineSmoother line;
     std::vector<double> b, x, r;
   };
   void cycle(int l, const double* b, double* x);
   void smooth(Level& L, const BlockMatrix& A, const double* b, double* x, bool pre);
   void build_levels(const std::vector<int64_t>& ids, int ni, int nj);
+  void fit(int l);
+  void cycle_vectors(const BlockMatrix& A);
 
   MultigridSettings s_;
   std::vector<Level> levels_;
   std::vector<MultigridLevelStats> stats_;
   const BlockMatrix* a0_ = nullptr;
   CoarseSolve coarse_;
+  std::unique_ptr<Multigrid> probe_;  // fit_cycles: the bilinear cycle that relaxes the test vectors
   uint64_t stamp_ = 0;
+  int ni_ = 0, nj_ = 0;
   int64_t rows_ = -1;
 };
 
