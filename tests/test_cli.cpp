@@ -510,12 +510,6 @@ TEST(CliBad, MultigridOnTwoRanks) {
                               "solver.preconditioner = \"multigrid\" runs on one rank only");
 }
 
-// Self-contact runs on one rank (a partner may lie beyond the ghost ring).
-TEST(CliBad, SelfContactOnTwoRanks) {
-  expect_refused_on_two_ranks("self-ranks", "--set 'cloth.particles=[17,17]' --set solver.self_contact=true",
-                              "solver.self_contact = true runs on one rank only");
-}
-
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a
 // combination the program cannot run are refused before anything is written.
 TEST(CliBad, CheckpointAndAmrcKeys) {

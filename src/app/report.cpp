@@ -108,6 +108,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("on", scene.solver.self_contact)
       .value("pair_builds", (long long)s.pair_builds)
       .value("pairs_listed", (long long)s.pairs_listed)
+      .value("contact_ghosts", (long long)s.contact_ghosts)
       .end_object();
   j.value("particles_solved", (long long)free_particles);
   j.value("final_spacing", s.final_spacing);

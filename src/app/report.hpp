@@ -78,6 +78,7 @@ struct Summary {
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
   uint64_t pair_builds = 0;   // self-contact: times the pair list was built
   int64_t pairs_listed = 0;   // self-contact: pairs in the last list (each counted at both particles)
+  int64_t contact_ghosts = 0; // self-contact: other ranks' particles hashed at the last build, over ranks
   double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
                               // (with AMRC, the finest leaf's)
   int64_t peak_rss = 0;             // bytes: the largest of the ranks' peak resident sets

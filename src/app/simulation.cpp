@@ -66,9 +66,6 @@ void Simulation::refuse_unsupported() const {
   if (sv.self_contact && numeric)
     throw InputError("solver.self_contact = true needs solver.gradient = \"analytic\" (the difference "
                      "windows do not reach a particle's contact partners)");
-  if (ranks_ > 1 && sv.self_contact)
-    throw InputError("solver.self_contact = true runs on one rank only (a partner may lie on another rank "
-                     "beyond the ghost ring); run it without mpirun");
   if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid)
     throw InputError("solver.preconditioner = \"multigrid\" runs on one rank only (its levels are not "
                      "split over ranks yet); run it without mpirun or use \"jacobi\"");

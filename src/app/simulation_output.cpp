@@ -152,7 +152,8 @@ void Simulation::summarise() {
   sum_.sequencing = sequencing_;
   sum_.drag = model.drag;
   sum_.pair_builds = loop->evaluator().self_contact().builds();
-  sum_.pairs_listed = loop->evaluator().self_contact().listed();
+  sum_.pairs_listed = red().sum_i64(loop->evaluator().self_contact().listed());  // each rank lists its own
+  sum_.contact_ghosts = red().sum_i64(loop->evaluator().self_contact().contact_ghosts());
   // The final mesh's spacing: the uniform mesh's when sequencing, the finest
   // leaf's with AMRC (every rank holds the whole tree), else the grid's.
   int finest_leaf = sequence_level_;

@@ -8,9 +8,17 @@
 // lists the particles it sends or receives in ascending global id, so no
 // index travels. An exchange posts every receive first, then sends one
 // message per neighbour rank, then waits.
+// Contact ghosts (plan_contact, for self-contact) follow the cloth, not the
+// tiles: every rank's box about its free particles, inflated by the reach,
+// goes to every rank; each rank sends every other the ids and positions of
+// its own free particles inside that rank's box (ascending id), and the
+// lists narrowed to the particles the receiver reads (keep_contact), values
+// only, with every later exchange that carries positions, and with every
+// exchange of per-particle arrays.
 #include <mpi.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "mesh/tiles.hpp"
@@ -28,6 +36,10 @@ class HaloExchange : public Halo {
 
   void exchange(double* z, int blocks) const override;
   void exchange_particles(double* a, int per) const override;
+  void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
+                    std::vector<int64_t>& ghosts) const override;
+  void keep_contact(const std::vector<int64_t>& kept) const override;
+  // The tile plan's particles, then the contact plan's (sent, then received).
   void plan(const std::function<void(int64_t, bool)>& f) const override;
   uint64_t plan_version() const override { return version_; }
   void exchange_at(double* a, const int32_t* send_at, const int32_t* recv_at) const override;
@@ -36,6 +48,8 @@ class HaloExchange : public Halo {
   const std::vector<int64_t>& ring() const { return ring_; }
   int64_t ghosts() const;
   int neighbours() const { return int(peers_.size()); }
+  // Contact ghosts on this rank (the last plan_contact's; 0 after replan).
+  int64_t contact_ghosts() const;
 
   // Running totals over all exchanges on this rank.
   mutable double seconds = 0;
@@ -47,25 +61,47 @@ class HaloExchange : public Halo {
     int64_t offset;
     int per;
   };
-  void run(double* data, const Field* fields, int nfields) const;
-  // One exchange of `per` values a particle: pack(k, b) fills peer k's
-  // send buffer, unpack(k, b) reads its receive buffer (peers in order).
+  // The tile plan's exchange of `fields`, with the contact plan's of
+  // `contact` (null: none) in the same round.
+  void run(double* data, const Field* fields, int nfields, const Field* contact) const;
+  // One exchange of per[0] values a particle over the tile plan and, with
+  // `contact`, per[1] over the contact plan in the same round: pack(i, k, b)
+  // fills plan i's (0 tiles, 1 contact) peer k's send buffer, unpack(i, k, b)
+  // reads its receive buffer (plans, then peers, in order).
   template <class Pack, class Unpack>
-  void transfer(int per, Pack&& pack, Unpack&& unpack) const;
+  void transfer(const int per[2], bool contact, Pack&& pack, Unpack&& unpack) const;
 
   struct Peer {
     int rank;
     std::vector<int64_t> send, recv;  // particle ids, ascending
   };
+  // One plan's messages: receives posted, sends packed and posted (requests
+  // from req), and after the wait the receives unpacked.
+  struct Round {
+    const std::vector<Peer>& peers;
+    std::vector<std::vector<double>>& sbuf;
+    std::vector<std::vector<double>>& rbuf;
+    int tag;
+  };
+  int post_receives(const Round& r, int per, MPI_Request* req) const;
   Tiling tiling_;
   MPI_Comm comm_;
   int width_, ring_width_;
   int64_t n_ = 0;  // particles in the grid
-  uint64_t version_ = 0;  // replans so far
+  mutable uint64_t version_ = 0;  // changes of either plan so far
   std::vector<Peer> peers_;
   std::vector<int64_t> ring_;
   mutable std::vector<std::vector<double>> sbuf_, rbuf_;
   mutable std::vector<MPI_Request> req_;
+  // The contact plan, one entry per rank (empty lists: no messages); its
+  // buffers, and the boxes of the last plan (6 per rank).
+  mutable std::vector<Peer> contact_;
+  mutable std::vector<std::vector<double>> csbuf_, crbuf_;
+  mutable std::vector<double> boxes_;
+  mutable std::vector<int64_t> sorted_;
+  mutable std::vector<std::vector<int64_t>> kept_in_, kept_out_;
+  mutable int64_t contact_sends_ = 0;  // particles this rank sends in the contact plan
+  void clear_contact() const;
 };
 
 }  // namespace drape

@@ -250,8 +250,8 @@ void Evaluator::use_local() {
 }
 
 // The own numbering: the free and hanging particles, then every other
-// particle an element or a hanging link touches (found where the first
-// search gives -1); then the elements', hanging links' and halo's tables.
+// particle an element, a hanging link or a pair (a contact ghost) touches
+// (found where the first search gives -1); then the elements', hanging links' and halo's tables.
 void Evaluator::build_local(bool exact) {
   local_stamp_ = lists_.stamp;
   local_hanging_ = lists_.hanging.size();
@@ -306,6 +306,9 @@ void Evaluator::number_elements(bool exact) {
   each(false, [&](int32_t* at, int k, int64_t) { others += at[k] < 0; });
   auto unlisted = [&](int64_t id) { return local_.index_of_listed(id) < 0; };
   for (const HangingLink& g : lists_.hanging) others += unlisted(g.a) + unlisted(g.b);
+  // Self-contact's partners on other ranks: the product reads their v.
+  const std::vector<int64_t>& partners = self_.ghost_partners();
+  others += int64_t(partners.size());
   local_.reserve_others(size_t(others), exact);
   each(false, [&](int32_t* at, int k, int64_t id) {
     if (at[k] < 0) local_.add_other(id);
@@ -313,6 +316,8 @@ void Evaluator::number_elements(bool exact) {
   for (const HangingLink& g : lists_.hanging)
     for (int64_t e : {g.a, g.b})
       if (unlisted(e)) local_.add_other(e);
+  for (int64_t q : partners)
+    if (unlisted(q)) local_.add_other(q);
   local_.seal();
   each(true, [&](int32_t* at, int k, int64_t id) {
     if (at[k] < 0) at[k] = int32_t(local_.index_of(id));
@@ -739,9 +744,9 @@ CostTerms Evaluator::settled_cost(double* z) {
   list_rows();
   // The ring's elements are settled here too, from the same positions and
   // anchors as their owners': no force halo (ranks_agree checks the bits).
+  refresh_pairs(z);
   halo_.exchange(z, Halo::kPositions);
   interpolate_hanging(z);
-  refresh_pairs(z);
   const CostTerms cost = cost_pass(z, z, false);
   settled_ = keep_;  // the elements' kept numbers are z's now (the particles' are not)
   kg_ready_ = false;
@@ -772,10 +777,10 @@ void Evaluator::fit_slopes(bool exact) {
 CostTerms Evaluator::evaluate(double* z, double* grad) {
   list_rows();
   settled_ = false;
+  refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   if (grad) size_slopes();
-  refresh_pairs(z);
   if (grad && fused_) return fused_cost_gradient(z, grad);
   const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
   if (!grad) return cost;
@@ -905,9 +910,9 @@ void Evaluator::hanging_residuals() {
 
 void Evaluator::scaling_diagonal(double* z, double* diag) {
   list_rows();
+  refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
-  refresh_pairs(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and

@@ -505,10 +505,12 @@ class Evaluator {
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
   // Self-contact's pairs, made to hold at z by every entry point that
-  // starts at a new z (evaluate, settled_cost, both diagonals).
+  // starts at a new z (evaluate, settled_cost, both diagonals), before its
+  // exchange of positions: a new list's contact ghosts come with it.
+  // Returns whether the list was built again.
   SelfContact self_;
-  void refresh_pairs(const double* z) {
-    if (m_.self_contact) self_.refresh(c_, lists_.particles, lists_.stamp, m_.contact, z);
+  bool refresh_pairs(const double* z) {
+    return m_.self_contact && self_.refresh(c_, lists_.particles, lists_.stamp, m_.contact, z, red_, halo_);
   }
 };
 

@@ -3,8 +3,8 @@
 // (docs/design.md §3): first its free particles in the particle list's
 // order (so index r is the compact vectors' row r), then the hanging
 // particles in the hanging list's order (the rows after), then the others
-// that its elements or hanging chains touch (its clamped particles, the
-// ghosts), ascending. A ghost nothing here reads has no index (the halo
+// that its elements, hanging chains or self-contact pairs touch (its
+// clamped particles, the ghosts, the contact ghosts), ascending. A ghost nothing here reads has no index (the halo
 // drops it); an own particle with none is sent as 0. Vectors so numbered are sized by the rank's
 // region, not the grid. A grid id is found by binary searches (its tile's
 // part of the particle list, the hanging ids, the others), done when the

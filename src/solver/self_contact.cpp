@@ -29,13 +29,19 @@ void SelfContact::memory(MemoryTable& t) const {
   t.add(o, "partner offsets and counts", first_.capacity() * sizeof(int64_t) + count_.capacity() * sizeof(int32_t));
   t.add(o, "partners", ids_);
   t.add(o, "spatial hash", (bucket_start_.capacity() + bucket_items_.capacity()) * sizeof(int32_t));
+  t.add(o, "contact ghosts", ghosts_);
 }
 
 bool SelfContact::refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact,
-                          const double* x) {
+                          const double* x, const Reducer& red, const Halo& halo) {
   size_arrays(c.grid.n());
   const bool same_layer = contact.thickness == contact_.thickness && contact.stiffness == contact_.stiffness;
-  if (builds_ > 0 && stamp == stamp_ && same_layer && still_holds(c, particles, x)) return false;
+  // One decision for all ranks (the build is collective): the largest move,
+  // or infinity where a rank's lists or the layer changed.
+  const bool stale = builds_ == 0 || stamp != stamp_ || !same_layer;
+  const double worst = red.max(stale ? HUGE_VAL : worst_move(particles, x));
+  const double limit = 0.25 * reach_;
+  if (worst <= limit * limit) return false;
   contact_ = contact;
   stamp_ = stamp;
   dist_ = 2 * contact.thickness;
@@ -43,14 +49,14 @@ bool SelfContact::refresh(const Cloth& c, const ActiveList& particles, uint64_t 
   // Mesh neighbours within reach at rest are held apart by the elements:
   // a fold brings them within D only if it is tighter than the layer.
   exclude2_ = reach_ * reach_ * (1 + 1e-9);
-  build(c, particles, x);
+  build(c, particles, x, halo);
   ++builds_;
   return true;
 }
 
-// Whether every listed particle is within reach/4 of where the last build
-// saw it (max over particles: exact in any order).
-bool SelfContact::still_holds(const Cloth&, const ActiveList& particles, const double* x) const {
+// The largest squared distance of a listed particle from where the last
+// build saw it (max over particles: exact in any order).
+double SelfContact::worst_move(const ActiveList& particles, const double* x) const {
   const int64_t n = particles.size();
   const int64_t* items = particles.items.data();
   double worst = 0;
@@ -64,8 +70,7 @@ bool SelfContact::still_holds(const Cloth&, const ActiveList& particles, const d
     }
     worst = std::max(worst, d2);
   }
-  const double limit = 0.25 * reach_;
-  return worst <= limit * limit;
+  return worst;
 }
 
 void SelfContact::cell_of(const double* x, int64_t cell[3]) const {
@@ -77,25 +82,31 @@ int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
   return int64_t(h & uint64_t(buckets_ - 1));
 }
 
-// Counting sort of the listed particles by bucket, in list order: serial,
-// one pass, so the hash is the same whatever the thread count.
+// Counting sort of the listed particles, then the contact ghosts, by
+// bucket, in that order: serial, one pass, so the hash is the same whatever
+// the thread count (and the partners are sorted after anyway).
 void SelfContact::hash_particles(const ActiveList& particles) {
-  // Buckets for this list's particles (a coarse stage has far fewer than
-  // the grid the arrays were sized for): a power of two, at least twice them.
+  // Buckets for these particles (a coarse stage has far fewer than the
+  // grid the arrays were sized for): a power of two, at least twice them.
+  const int64_t hashed = particles.size() + int64_t(ghosts_.size());
   buckets_ = 1;
-  while (buckets_ < 2 * particles.size()) buckets_ *= 2;
+  while (buckets_ < 2 * hashed) buckets_ *= 2;
   int32_t* start = bucket_start_.data();
   std::fill(start, start + buckets_ + 1, 0);
   int64_t cell[3];
-  for (int64_t p : particles.items) {
+  auto count = [&](int64_t p) {
     cell_of(&xb_[3 * p], cell);
     ++start[bucket_of(cell[0], cell[1], cell[2]) + 1];
-  }
-  for (int64_t b = 1; b <= buckets_; ++b) start[b] += start[b - 1];
-  for (int64_t p : particles.items) {
+  };
+  auto place = [&](int64_t p) {
     cell_of(&xb_[3 * p], cell);
     bucket_items_[start[bucket_of(cell[0], cell[1], cell[2])]++] = int32_t(p);
-  }
+  };
+  for (int64_t p : particles.items) count(p);
+  for (int64_t p : ghosts_) count(p);
+  for (int64_t b = 1; b <= buckets_; ++b) start[b] += start[b - 1];
+  for (int64_t p : particles.items) place(p);
+  for (int64_t p : ghosts_) place(p);
   for (int64_t b = buckets_; b > 0; --b) start[b] = start[b - 1];  // back to each bucket's start
   start[0] = 0;
 }
@@ -127,7 +138,7 @@ void SelfContact::candidates(const Cloth& c, int64_t p, F&& f) const {
       }
 }
 
-void SelfContact::build(const Cloth& c, const ActiveList& particles, const double* x) {
+void SelfContact::build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo) {
   const int64_t n = particles.size();
   const int64_t* items = particles.items.data();
   // A particle outside the list has no partners: cleared when the list
@@ -137,6 +148,8 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k)
     for (int i = 0; i < 3; ++i) xb_[3 * items[k] + i] = x[3 * items[k] + i];
+  // Other ranks' particles within reach, and their positions into xb_.
+  halo.plan_contact(particles.items, reach_, xb_.data(), ghosts_);
   hash_particles(particles);
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
@@ -159,6 +172,22 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
     candidates(c, p, [&](int64_t q) { out[m++] = int32_t(q); });
     std::sort(out, out + m);  // the gather's fixed order: ascending global id
   }
+  keep_partners(halo);
+}
+
+// Only partners are read (their positions, K's direction, the residuals):
+// the other contact ghosts need not be refreshed.
+void SelfContact::keep_partners(const Halo& halo) {
+  partner_.assign(ghosts_.size(), 0);
+  if (!ghosts_.empty())
+    for (int64_t k = 0; k < listed_; ++k) {
+      const auto at = std::lower_bound(ghosts_.begin(), ghosts_.end(), int64_t(ids_[k]));
+      if (at != ghosts_.end() && *at == ids_[k]) partner_[size_t(at - ghosts_.begin())] = 1;
+    }
+  kept_.clear();
+  for (size_t k = 0; k < ghosts_.size(); ++k)
+    if (partner_[k]) kept_.push_back(ghosts_[k]);
+  halo.keep_contact(kept_);
 }
 
 bool SelfContact::term(const double* x, int64_t p, int64_t q, PairTerm& t) const {

@@ -12,14 +12,21 @@
 // the forces do not depend on when it was built (pairs beyond D add nothing).
 // Each particle keeps its partners sorted by global id and gathers its own
 // pair terms in that order: the same sums on any thread count (gather, never
-// scatter).
+// scatter). On several ranks a partner may be any free particle of another
+// rank: at each build the halo lists those within the reach of this rank's
+// (contact ghosts, Halo::plan_contact) with their positions, and refreshes
+// their entries with the ordinary ghosts' from then on; every rank builds
+// when one must (the largest move over all ranks), so the lists, and the
+// sums, are those of one rank.
 #include <cstdint>
 #include <vector>
 
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
 #include "solver/contact.hpp"
+#include "solver/halo.hpp"
 #include "solver/memory_table.hpp"
+#include "solver/reducer.hpp"
 
 namespace drape {
 
@@ -34,8 +41,12 @@ class SelfContact {
   // Makes the pair list hold at positions x (free particles of `particles`):
   // rebuilt when the lists, the contact layer or its stiffness changed, or a
   // particle moved more than a quarter of the search reach since the last
-  // build. Returns true if it rebuilt. Sizes its arrays at the first call.
-  bool refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact, const double* x);
+  // build (over all ranks: collective, through red and halo). Returns true
+  // if it rebuilt; then the contact ghosts' entries of x are not yet
+  // current (the next exchange of positions brings them). Sizes its arrays
+  // at the first call.
+  bool refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact, const double* x,
+               const Reducer& red, const Halo& halo = no_halo());
 
   // The pair distance D (0 before the first refresh).
   double distance() const { return dist_; }
@@ -93,12 +104,17 @@ class SelfContact {
   // (each once per particle) of the last build.
   uint64_t builds() const { return builds_; }
   int64_t listed() const { return listed_; }
+  // The last build's contact ghosts that are partners (other ranks'
+  // particles whose values this rank reads until the next build).
+  int64_t contact_ghosts() const { return int64_t(kept_.size()); }
+  const std::vector<int64_t>& ghost_partners() const { return kept_; }  // those, ascending
   void memory(MemoryTable& t) const;
 
  private:
   void size_arrays(int64_t n);
-  bool still_holds(const Cloth& c, const ActiveList& particles, const double* x) const;
-  void build(const Cloth& c, const ActiveList& particles, const double* x);
+  // The largest squared move of a listed particle since the last build.
+  double worst_move(const ActiveList& particles, const double* x) const;
+  void build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo);
   void hash_particles(const ActiveList& particles);
   // Calls f(q) for each particle q != p within the search reach of p at the
   // build's positions and not excluded as p's mesh neighbour.
@@ -117,6 +133,11 @@ class SelfContact {
   std::vector<int32_t> count_;      // per grid particle: its partners (0 for any unlisted)
   std::vector<int32_t> ids_;        // partners, each particle's ascending
   std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: particles by bucket, list order
+  std::vector<int64_t> ghosts_;     // the last build's contact ghosts, ascending
+  std::vector<int64_t> kept_;       // those some listed particle has as a partner
+  std::vector<char> partner_;       // per contact ghost: a partner (the build's scratch)
+  // Narrows the halo's contact ghosts to the partners (kept_).
+  void keep_partners(const Halo& halo);
 };
 
 }  // namespace drape

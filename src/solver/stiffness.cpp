@@ -206,8 +206,8 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
     }
     add_friction_product(p, z, vp, out);
-    if (m_.self_contact)  // partners are free particles of this rank's (one rank)
-      self_.add_product(p, z, vp, [&](int64_t q) { return v + 3 * local_.index_of_listed(q); }, out);
+    if (m_.self_contact)  // partners: free here, or contact ghosts (numbered with the others)
+      self_.add_product(p, z, vp, [&](int64_t q) { return v + 3 * local_.index_of(q); }, out);
     gather_listed(rows_[pos], [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
@@ -274,8 +274,14 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // but itself.
 void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   list_rows();
+  // At a z no evaluation saw (Newton's order never does that), a new pair
+  // list's contact ghosts need their positions: z's ghost entries are a
+  // copy of other ranks' values, refreshed as the other entry points do.
+  if (refresh_pairs(z)) halo_.exchange(const_cast<double*>(z), Halo::kPositions);
   use_local();
-  refresh_pairs(z);
+  // A new pair list changes the halo's plan (its contact ghosts): the
+  // numbering follows, before any product reads it.
+  if (local_stale()) build_local(false);
   k_z_ = z;
   const bool settled = settled_;
   auto edge = [&](int64_t s, int64_t pos) {

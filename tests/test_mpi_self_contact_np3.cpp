@@ -1,0 +1,162 @@
+// Three ranks: self-contact across ranks. The folded strip dropped onto
+// itself, run by the drape program's simulation on 1 rank with 2 threads,
+// on 2 and on 3 ranks (sub-communicators of the three), ends in the
+// same state checksum; its pairs reach across ranks (contact ghosts), and
+// the state differs from the same run without self-contact. The cost's
+// gradient at a pressed fold is the same on 1, 2 and 3 ranks.
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <omp.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include "decomp/collective.hpp"
+#include "solver/checksum.hpp"
+#include "support/folded_strip.hpp"
+
+namespace drape::test {
+namespace {
+
+int rank() { return rank_of(MPI_COMM_WORLD); }
+
+// A broadcast from rank 0 whose waiting ranks sleep between polls: a rank
+// left out of a run must not take the cores its threads spin on.
+void quiet_bcast(void* data, int count, MPI_Datatype type) {
+  MPI_Request req;
+  MPI_Ibcast(data, count, type, 0, MPI_COMM_WORLD, &req);
+  int done = 0;
+  for (MPI_Test(&req, &done, MPI_STATUS_IGNORE); !done; MPI_Test(&req, &done, MPI_STATUS_IGNORE)) usleep(2000);
+}
+
+struct Outcome {
+  std::string checksum;
+  int64_t contact_ghosts = 0;  // over the ranks, at the last build
+  int64_t in_contact = 0;      // pairs closer than the pair distance at the end, over the ranks
+  uint64_t builds = 0;
+};
+
+// Pairs of p's listed partners in contact at the end, over this rank's particles.
+int64_t pairs_in_contact(const Simulation& w) {
+  const SelfContact& sc = w.loop->evaluator().self_contact();
+  int64_t n = 0;
+  for (int64_t p : w.lists.particles.items)
+    sc.for_partners(p, [&](int64_t q) {
+      PairTerm t;
+      n += sc.term(w.cloth.z.data(), p, q, t);
+    });
+  return n;
+}
+
+// The flap dropped from just above the lower half (1.02 pair distances), so
+// that pairs come into contact within a few steps, for `end` seconds, on the
+// first `ranks` ranks with `threads` threads; every rank gets rank 0's result.
+Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = SolverMethod::Newton,
+             double end = 0.06) {
+  MPI_Comm comm;
+  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
+  Outcome out;
+  char sum[40] = {0};
+  int64_t counts[3] = {0, 0, 0};
+  if (comm != MPI_COMM_NULL) {
+    omp_set_num_threads(threads);
+    RunOptions opt;
+    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_" + std::to_string(ranks) +
+                     (self_contact ? "_on" : "_off") +
+                     (method == SolverMethod::Cg ? "_cg" : "");
+    opt.quiet = true;
+    Scene scene = strip_scene(self_contact);
+    scene.solver.method = method;
+    Simulation w(scene, test_fabric(), opt, comm);
+    fold(w, 1.02);
+    w.start();
+    while (w.cloth.time < end) w.step();
+    const std::string hex = state_checksum(w.cloth, w.tiling, w.owned(), w.red()).hex();
+    hex.copy(sum, sizeof sum - 1);
+    const SelfContact& sc = w.loop->evaluator().self_contact();
+    counts[0] = w.red().sum_i64(sc.contact_ghosts());
+    counts[1] = w.red().sum_i64(pairs_in_contact(w));
+    counts[2] = int64_t(sc.builds());
+    omp_set_num_threads(1);
+    MPI_Comm_free(&comm);
+  }
+  quiet_bcast(sum, sizeof sum, MPI_CHAR);
+  quiet_bcast(counts, 3, MPI_INT64_T);
+  out.checksum = sum;
+  out.contact_ghosts = counts[0];
+  out.in_contact = counts[1];
+  out.builds = uint64_t(counts[2]);
+  return out;
+}
+
+// The drape runs Newton with pairs in contact across rank borders: its
+// products K v read those partners' v, numbered as the rank's others and
+// refreshed by Halo::exchange_at, so this compares that path too.
+TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanks) {
+  const Outcome one = drop(1, 2, true), two = drop(2, 1, true), three = drop(3, 1, true);
+  ASSERT_FALSE(one.checksum.empty());
+  EXPECT_GT(one.in_contact, 20) << "pairs should be in contact";
+  EXPECT_EQ(one.contact_ghosts, 0);
+  EXPECT_GT(two.contact_ghosts, 0) << "no partner on another rank: the test does not cover contact ghosts";
+  EXPECT_GT(three.contact_ghosts, 0);
+  EXPECT_EQ(two.checksum, one.checksum);
+  EXPECT_EQ(three.checksum, one.checksum);
+  EXPECT_EQ(two.in_contact, one.in_contact);
+  EXPECT_EQ(three.in_contact, one.in_contact);
+  EXPECT_EQ(two.builds, one.builds);
+  EXPECT_EQ(three.builds, one.builds);
+  // The pairs change the state: the comparison above could fail.
+  const Outcome off = drop(2, 1, false);
+  EXPECT_NE(off.checksum, one.checksum);
+}
+
+// The cost's gradient at a folded strip pressed together and jittered (as
+// test_self_contact's), hashed over the free particles with their ids: its
+// self-contact part reads the partners' residuals, which contact ghosts get
+// with the residuals' exchange. Every rank gets rank 0's digest.
+std::string pressed_gradient(int ranks) {
+  MPI_Comm comm;
+  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
+  char sum[40] = {0};
+  if (comm != MPI_COMM_NULL) {
+    RunOptions opt;
+    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_grad_" + std::to_string(ranks);
+    opt.quiet = true;
+    Simulation w(strip_scene(true), test_fabric(), opt, comm);
+    fold(w, 0.5);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int64_t k = 0; k < 3 * w.cloth.grid.n(); ++k) w.cloth.z[k] += 0.1 * kH * u(rng);
+    w.model.dt = w.model.dt_prev = 1e-3;
+    w.loop->freeze_bend_axes();
+    Evaluator& ev = w.loop->evaluator();
+    ev.hysteresis_forces(w.cloth.z.data());
+    std::vector<double> grad(w.cloth.z.size());
+    ev.evaluate(w.cloth.z.data(), grad.data());
+    uint64_t h = 0;
+    for (int64_t p : w.lists.particles.items) {
+      Hasher one{uint64_t(p)};
+      for (int k = 0; k < 3; ++k) one.add(grad[3 * p + k]);
+      h += one.value();
+    }
+    const std::string hex = std::to_string(w.red().sum_u64(h)) + "/" + std::to_string(w.red().sum_i64(pairs_in_contact(w)));
+    hex.copy(sum, sizeof sum - 1);
+    MPI_Comm_free(&comm);
+  }
+  quiet_bcast(sum, sizeof sum, MPI_CHAR);
+  return sum;
+}
+
+TEST(MpiSelfContact, GradientSameOnOneTwoAndThreeRanks) {
+  const std::string one = pressed_gradient(1);
+  ASSERT_FALSE(one.empty());
+  EXPECT_GT(std::stoll(one.substr(one.find('/') + 1)), 20) << "pairs should be in contact";
+  EXPECT_EQ(pressed_gradient(2), one);
+  EXPECT_EQ(pressed_gradient(3), one);
+}
+
+}  // namespace
+}  // namespace drape::test
