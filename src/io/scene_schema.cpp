@@ -100,7 +100,7 @@ void declare_solver(ParameterList& list) {
       .add("preconditioner", &SolverSpec::preconditioner, {Preconditioner::Jacobi, Preconditioner::Multigrid},
            "newton's linear CG: jacobi | multigrid (one rank)",
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
-           "grid's levels: iterations flat in the spacing; one rank only) ([design.md §7](design.md))")
+           "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; one rank only) ([design.md §7](design.md))")
           .example("multigrid")
       .add("newton_target", &SolverSpec::newton_target, "", at_least(1),
            "multigrid: Newton iterations per step that dt grows under",
