@@ -8,6 +8,7 @@
 
 #include "amrc/amrc.hpp"
 #include "amrc/remesh.hpp"
+#include "support/folded_strip.hpp"
 #include "support/scenes.hpp"
 
 namespace {
@@ -71,6 +72,26 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrc) { expect_no_allocation(false); }
 TEST(Allocation, NoneWithNewtonsSlopeLineSearch) { expect_no_allocation(true); }
 
 TEST(Allocation, NoneWithNewtonsBandActiveSet) { expect_no_allocation(false, true); }
+
+// Self-contact on one rank: the folded strip's flap dropped onto its lower
+// half from 2.4 pair distances, pair lists built again between Newton steps
+// as it falls (their partners' indices kept again) while counting.
+TEST(Allocation, NoneWithSelfContact) {
+  Simulation w(strip_scene(true), test_fabric());
+  fold(w, 2.4);
+  const SelfContact& sc = w.loop->evaluator().self_contact();
+  for (int k = 0; k < 3; ++k) w.step();  // sizes every buffer, the pair list's included
+  const uint64_t built = sc.builds();
+  int iterations = 0;
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 0; k < 60; ++k) iterations += w.step().iterations;
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations during 60 steps";
+  EXPECT_GT(sc.builds(), built) << "the pair list should have been built again while counting";
+  EXPECT_GT(sc.listed(), 0) << "no pairs listed";
+  EXPECT_GT(iterations, 0);
+}
 
 }  // namespace
 }  // namespace drape::test

@@ -10,6 +10,8 @@
 
 #include <unistd.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -98,6 +100,7 @@ Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = So
 TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanks) {
   const Outcome one = drop(1, 2, true), two = drop(2, 1, true), three = drop(3, 1, true);
   ASSERT_FALSE(one.checksum.empty());
+  if (getenv("DRAPE_DEBUG_SELF") && rank() == 0) printf("folded strip: %s\n", one.checksum.c_str());
   EXPECT_GT(one.in_contact, 20) << "pairs should be in contact";
   EXPECT_EQ(one.contact_ghosts, 0);
   EXPECT_GT(two.contact_ghosts, 0) << "no partner on another rank: the test does not cover contact ghosts";

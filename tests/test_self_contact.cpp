@@ -12,6 +12,7 @@
 #include <memory>
 #include <random>
 
+#include "solver/memory_table.hpp"
 #include "solver/multigrid/block_matrix.hpp"
 #include "support/assembled_check.hpp"
 #include "support/folded_strip.hpp"
@@ -202,6 +203,57 @@ TEST(SelfContact, ForcesDoNotDependOnWhenTheListWasBuilt) {
   fresh.loop->evaluator().evaluate(fresh.cloth.z.data(), nullptr);
   ASSERT_GT(pairs_in_contact(w), 20);
   EXPECT_TRUE(ev.residual() == fresh.loop->evaluator().residual());
+}
+
+// A new pair list on the same own numbering (one rank: no contact ghosts,
+// no list change) gives the product of a world that built that list first:
+// the partners' kept indices follow the list.
+TEST(SelfContact, ProductFollowsANewPairList) {
+  const auto world = pressed_world(6), fresh_world = pressed_world(6);
+  Simulation& w = *world;
+  Simulation& fresh = *fresh_world;
+  const size_t n = w.cloth.z.size();
+  std::vector<double> v(n), kv(n, 0.0), diag(n), fresh_kv(n, 0.0);
+  auto newton_order = [&](Simulation& s, double* z, std::vector<double>& out) {
+    Evaluator& ev = s.loop->evaluator();
+    ev.evaluate(z, nullptr);
+    ev.settled_cost(z);
+    ev.stiffness_diagonal(z, diag.data());
+    for (size_t k = 0; k < n; ++k) v[k] = 1e-3 * double(int(k * 7919 % 13) - 6);
+    ev.stiffness_product(z, v.data(), out.data());
+  };
+  std::vector<double> apart = w.cloth.z;  // the flap lifted 3 pair distances: other pairs listed
+  for (int64_t p = 0; p < w.cloth.grid.n(); ++p)
+    if (w.cloth.z[3 * p + 2] > 0.75 * kH) apart[3 * p + 2] += 3 * kH;
+  newton_order(w, apart.data(), kv);
+  const uint64_t built = w.loop->evaluator().self_contact().builds();
+  const int64_t listed = w.loop->evaluator().self_contact().listed();
+  newton_order(w, w.cloth.z.data(), kv);
+  ASSERT_GT(w.loop->evaluator().self_contact().builds(), built) << "the list should have been built again";
+  ASSERT_NE(w.loop->evaluator().self_contact().listed(), listed) << "the same pairs: the test would not see stale indices";
+  newton_order(fresh, fresh.cloth.z.data(), fresh_kv);
+  ASSERT_GT(pairs_in_contact(w), 20);
+  for (int64_t p : w.lists.particles.items)
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(kv[3 * p + k], fresh_kv[3 * p + k]) << "particle " << p;
+}
+
+// The partners' own-numbering indices (kept beside the pair list for the
+// product) are in the evaluator's memory table, one per listed partner id.
+TEST(SelfContact, PartnerIndicesAreInTheMemoryTable) {
+  const auto world = pressed_world(5);
+  Simulation& w = *world;
+  Evaluator& ev = w.loop->evaluator();
+  ev.settled_cost(w.cloth.z.data());
+  ASSERT_GT(pairs_in_contact(w), 20);
+  MemoryTable t;
+  ev.memory(t);
+  size_t ids = 0, indices = 0;
+  for (const MemoryTable::Row& r : t.rows) {
+    if (r.owner == "SelfContact" && r.array == "partners") ids += r.bytes;
+    if (r.owner == "SelfContact" && r.array == "partners' own-numbering indices") indices += r.bytes;
+  }
+  EXPECT_GE(ids, sizeof(int32_t) * size_t(ev.self_contact().listed()));
+  EXPECT_EQ(indices, ids);
 }
 
 }  // namespace

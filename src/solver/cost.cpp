@@ -260,6 +260,16 @@ void Evaluator::build_local(bool exact) {
   number_elements(exact);
   map_hanging(exact);
   map_halo(exact);
+  number_pairs();
+}
+
+// Self-contact's partners in the own numbering, kept beside the pair list
+// (at each new list or numbering): the product reads them, never searches.
+// A pair list built for older lists may name particles the numbering no
+// longer has; the next refresh replaces it before any product.
+void Evaluator::number_pairs() {
+  pairs_numbered_ = self_.builds();
+  pairs_missing_ = m_.self_contact ? self_.number_partners([this](int64_t q) { return local_.index_of(q); }) : 0;
 }
 
 // The elements' tables, filled in parallel (each entry by its own element),

@@ -345,6 +345,7 @@ class Evaluator {
   // The numbering, the elements' local tables, the hanging links' and the
   // halo's local indices, for the lists, hanging particles and halo plan now.
   void build_local(bool exact);
+  void number_pairs();
   void number_elements(bool exact);
   void map_hanging(bool exact);
   void map_halo(bool exact);
@@ -500,6 +501,8 @@ class Evaluator {
   std::vector<int32_t> lo_e_, lo_t_, lo_s_, hang_lo_, halo_send_, halo_recv_;
   std::vector<double> hpend_lo_;
   uint64_t local_stamp_ = 0, local_plan_ = 0;
+  uint64_t pairs_numbered_ = 0;  // the pair list (SelfContact::builds) whose partners number_pairs kept
+  int64_t pairs_missing_ = 0;    // its partners the numbering lacks (a product then refuses)
   size_t local_hanging_ = 0;
   std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
   std::vector<double> partials_;                  // 4 rows x owned tiles

@@ -17,6 +17,7 @@ void SelfContact::size_arrays(int64_t n) {
   first_.assign(n, 0);
   count_.assign(n, 0);
   ids_.assign(kReservedPartners * n, 0);
+  lo_.assign(kReservedPartners * n, -1);
   int64_t buckets = 1;
   while (buckets < 2 * n) buckets *= 2;  // a power of two: the hash masks
   bucket_start_.assign(buckets + 1, 0);
@@ -28,6 +29,7 @@ void SelfContact::memory(MemoryTable& t) const {
   t.add(o, "build positions", xb_);
   t.add(o, "partner offsets and counts", first_.capacity() * sizeof(int64_t) + count_.capacity() * sizeof(int32_t));
   t.add(o, "partners", ids_);
+  t.add(o, "partners' own-numbering indices", lo_);
   t.add(o, "spatial hash", (bucket_start_.capacity() + bucket_items_.capacity()) * sizeof(int32_t));
   t.add(o, "contact ghosts", ghosts_);
 }
@@ -162,7 +164,10 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
     first_[items[k]] = total;
     total += count_[items[k]];
   }
-  if (total > int64_t(ids_.size())) ids_.resize(size_t(total + total / 2));
+  if (total > int64_t(ids_.size())) {
+    ids_.resize(size_t(total + total / 2));
+    lo_.resize(ids_.size(), -1);
+  }
   listed_ = total;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
@@ -234,7 +239,10 @@ void SelfContact::add_jtr(int64_t p, const double* x, const double* r, double* j
 }
 
 void SelfContact::add_product(int64_t p, const double* x, const double* v, double* out) const {
-  add_product(p, x, v + 3 * p, [v](int64_t q) { return v + 3 * q; }, out);
+  for_partners(p, [&](int64_t q) {
+    PairTerm t;
+    if (term(x, p, q, t)) normal_product(t, v + 3 * p, v + 3 * q, out);
+  });
 }
 
 double SelfContact::slope_sum(int64_t p, const double* x) const {

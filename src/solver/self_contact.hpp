@@ -68,18 +68,29 @@ class SelfContact {
   // K's part at p (its positive semi-definite normal term): sum over pairs
   // of slope n n^T (v_p - v_q), added to out.
   void add_product(int64_t p, const double* x, const double* v, double* out) const;
-  // The same with v in another numbering: vp is p's 3 values, v_of(q) a
-  // partner's.
-  template <class VOf>
-  void add_product(int64_t p, const double* x, const double* vp, VOf&& v_of, double* out) const {
-    for_partners(p, [&](int64_t q) {
+  // The same with v in the own numbering (number_partners's): vp is p's 3
+  // values, each partner's at its kept index.
+  void add_product_local(int64_t p, const double* x, const double* vp, const double* v, double* out) const {
+    if (listed_ == 0) return;
+    const int64_t at = first_[p];
+    for (int k = 0; k < count_[p]; ++k) {
       PairTerm t;
-      if (!term(x, p, q, t)) return;
-      const double* vq = v_of(q);
-      double nv = 0;
-      for (int i = 0; i < 3; ++i) nv += t.n[i] * (vp[i] - vq[i]);
-      for (int i = 0; i < 3; ++i) out[i] += t.slope * nv * t.n[i];
-    });
+      if (term(x, p, ids_[at + k], t)) normal_product(t, vp, v + 3 * int64_t(lo_[at + k]), out);
+    }
+  }
+  // Keeps each listed partner's index in a rank's own numbering,
+  // index_of(q), beside its id: done when the list or the numbering
+  // changes, so that a product never searches. Returns how many partners
+  // have none (index_of gave -1): 0 unless the numbering lacks a partner.
+  template <class IndexOf>
+  int64_t number_partners(IndexOf&& index_of) {
+    int64_t missing = 0;
+#pragma omp parallel for schedule(static) reduction(+ : missing)
+    for (int64_t k = 0; k < listed_; ++k) {
+      lo_[k] = int32_t(index_of(int64_t(ids_[k])));
+      missing += lo_[k] < 0;
+    }
+    return missing;
   }
   // Sum of the pairs' slopes at p (the trace of K's diagonal block).
   double slope_sum(int64_t p, const double* x) const;
@@ -122,6 +133,12 @@ class SelfContact {
   void candidates(const Cloth& c, int64_t p, F&& f) const;
   int64_t bucket_of(int64_t cx, int64_t cy, int64_t cz) const;
   void cell_of(const double* x, int64_t cell[3]) const;
+  // Adds a pair's slope n n^T (v_p - v_q) to out.
+  static void normal_product(const PairTerm& t, const double* vp, const double* vq, double* out) {
+    double nv = 0;
+    for (int i = 0; i < 3; ++i) nv += t.n[i] * (vp[i] - vq[i]);
+    for (int i = 0; i < 3; ++i) out[i] += t.slope * nv * t.n[i];
+  }
 
   Contact contact_;
   double dist_ = 0, reach_ = 0, exclude2_ = 0;
@@ -132,6 +149,7 @@ class SelfContact {
   std::vector<int64_t> first_;      // per grid particle: its partners' offset in ids_
   std::vector<int32_t> count_;      // per grid particle: its partners (0 for any unlisted)
   std::vector<int32_t> ids_;        // partners, each particle's ascending
+  std::vector<int32_t> lo_;         // beside ids_: their indices in a rank's own numbering (number_partners)
   std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: particles by bucket, list order
   std::vector<int64_t> ghosts_;     // the last build's contact ghosts, ascending
   std::vector<int64_t> kept_;       // those some listed particle has as a partner

@@ -3,6 +3,7 @@
 // and fixed-order gathers as the cost (deterministic for any thread count).
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "solver/cost.hpp"
 #include "solver/kernels.hpp"
@@ -130,6 +131,8 @@ void Evaluator::add_friction_product(int64_t p, const double* z, const double* v
 void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) {
   list_rows();
   use_local();
+  if (pairs_numbered_ != self_.builds()) number_pairs();  // a new pair list on the same numbering
+  if (pairs_missing_ > 0) throw std::logic_error("Evaluator: a self-contact partner has no index in the own numbering");
   halo_.exchange_at(v, halo_send_.data(), halo_recv_.data());
   interpolate_hanging_local(v);  // K acts on P v: hanging entries follow their ends
   // What depends on z alone (edges' lengths and directions, triples' and
@@ -207,7 +210,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     }
     add_friction_product(p, z, vp, out);
     if (m_.self_contact)  // partners: free here, or contact ghosts (numbered with the others)
-      self_.add_product(p, z, vp, [&](int64_t q) { return v + 3 * local_.index_of(q); }, out);
+      self_.add_product_local(p, z, vp, v, out);
     gather_listed(rows_[pos], [&](const double* c) {
       out[0] += c[0];
       out[1] += c[1];
