@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 #include "amrc/criterion.hpp"
@@ -849,6 +850,71 @@ TEST(Evaluator, FusedCostGradientIsTheSeparatePasses) {
         }
         first = fused.grad;
       }
+    }
+  omp_set_num_threads(threads_before);
+}
+
+// cost_for_gradient(z) then gradient_at_last_cost(grad) gives what
+// evaluate(z, grad) in one parallel region gives, bit for bit: the cost
+// terms, every gradient entry (both start from NaN), the residuals; on a
+// plain mesh and an AMRC one, on one thread and on three; at z and at z
+// moved, the pair's evaluator costing a trial at another z before each (the
+// line search's rejected trials: their numbers must not stand in).
+TEST(Evaluator, CostThenGradientIsEvaluate) {
+  const int threads_before = omp_get_max_threads();
+  for (bool amrc : {false, true})
+    for (int threads : {1, 3}) {
+      omp_set_num_threads(threads);
+      const auto whole_world = random_world(19, amrc), split_world = random_world(19, amrc);
+      struct Out {
+        CostTerms cost;
+        std::vector<double> grad, rho, rho_grid;
+      };
+      auto moved = [](Simulation& w, int move) {
+        std::vector<double> z = w.cloth.z;
+        for (int64_t p : w.lists.particles.items) z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * move * (p % 5);
+        return z;
+      };
+      auto run = [&](Simulation& w, bool split, int move) {
+        Evaluator& ev = w.loop->evaluator();
+        std::vector<double> z = moved(w, move);
+        Out o;
+        o.grad.assign(z.size(), std::nan(""));
+        if (split) {
+          std::vector<double> rejected = moved(w, move + 3);
+          ev.cost_for_gradient(rejected.data());
+          o.cost = ev.cost_for_gradient(z.data());
+          ev.gradient_at_last_cost(o.grad.data());
+        } else {
+          o.cost = ev.evaluate(z.data(), o.grad.data());
+        }
+        o.rho = ev.residual();
+        o.rho_grid = ev.gradient_residual();
+        return o;
+      };
+      const std::string mesh = std::string(amrc ? "AMRC mesh, " : "plain mesh, ") + std::to_string(threads) + " threads";
+      if (amrc) {
+        ASSERT_GT(split_world->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
+      }
+      std::vector<double> first;
+      for (int move : {0, 1}) {
+        const Out whole = run(*whole_world, false, move), split = run(*split_world, true, move);
+        const std::string where = mesh + (move ? ", z moved" : "");
+        EXPECT_EQ(whole.cost.newton, split.cost.newton) << where;
+        EXPECT_EQ(whole.cost.stretch, split.cost.stretch) << where;
+        EXPECT_EQ(whole.cost.bend, split.cost.bend) << where;
+        EXPECT_EQ(whole.cost.shear, split.cost.shear) << where;
+        EXPECT_EQ(whole.grad, split.grad) << where << ": the gradient";
+        EXPECT_EQ(whole.rho, split.rho) << where << ": the residuals";
+        EXPECT_EQ(whole.rho_grid, split.rho_grid) << where << ": the residuals at z's indices";
+        if (move) {
+          EXPECT_NE(first, split.grad) << where << ": the move changed nothing: the test does not test";
+        }
+        first = split.grad;
+      }
+      // The gradient is taken once per cost: a second one has nothing to read.
+      std::vector<double> g(split_world->cloth.z.size());
+      EXPECT_THROW(split_world->loop->evaluator().gradient_at_last_cost(g.data()), std::logic_error) << mesh;
     }
   omp_set_num_threads(threads_before);
 }

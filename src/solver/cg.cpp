@@ -125,8 +125,9 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
       }
       CostTerms trial;
       {
+        // A trial's cost only: its gradient waits until it is accepted.
         ScopedPhase ph(tm, tries == 0 ? kGradient : kLineSearch);
-        trial = eval(ev, zt, gn, st.numeric);
+        trial = st.numeric ? ev.numeric_gradient(zt, gn) : ev.cost_for_gradient(zt);
       }
       ++res.evaluations;
       ct = trial.total();
@@ -150,6 +151,10 @@ CgResult Minimizer::minimize(Evaluator& ev, double* z, const CgSettings& st, Tim
       steepest = true;
       alpha_ = 1.0;
       continue;
+    }
+    if (!st.numeric) {
+      ScopedPhase ph(tm, kGradient);
+      ev.gradient_at_last_cost(gn);  // at zt, from its cost pass's numbers
     }
     ScopedPhase ph(tm, kVector);
     dn = dot(gn, d);

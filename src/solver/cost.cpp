@@ -751,6 +751,7 @@ CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
 }
 
 CostTerms Evaluator::settled_cost(double* z) {
+  cost_z_ = nullptr;
   list_rows();
   // The ring's elements are settled here too, from the same positions and
   // anchors as their owners': no force halo (ranks_agree checks the bits).
@@ -785,15 +786,38 @@ void Evaluator::fit_slopes(bool exact) {
 }
 
 CostTerms Evaluator::evaluate(double* z, double* grad) {
+  if (grad && !fused_) {
+    const CostTerms cost = cost_for_gradient(z);
+    gradient_at_last_cost(grad);
+    return cost;
+  }
+  cost_z_ = nullptr;
   list_rows();
   settled_ = false;
   refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
-  if (grad) size_slopes();
-  if (grad && fused_) return fused_cost_gradient(z, grad);
-  const CostTerms cost = cost_pass(z, nullptr, grad != nullptr);
-  if (!grad) return cost;
+  if (!grad) return cost_pass(z, nullptr, false);
+  size_slopes();
+  return fused_cost_gradient(z, grad);
+}
+
+CostTerms Evaluator::cost_for_gradient(double* z) {
+  list_rows();
+  settled_ = false;
+  refresh_pairs(z);
+  halo_.exchange(z, Halo::kAll);
+  interpolate_hanging(z);
+  size_slopes();
+  const CostTerms cost = cost_pass(z, nullptr, true);
+  cost_z_ = z;
+  return cost;
+}
+
+void Evaluator::gradient_at_last_cost(double* grad) {
+  if (!cost_z_) throw std::logic_error("gradient_at_last_cost: no cost_for_gradient before it");
+  const double* z = cost_z_;
+  cost_z_ = nullptr;
   halo_.exchange_particles(rho_grid_.data(), 3);
   hanging_residuals();
   const int64_t nz = c_.layout.size();
@@ -805,7 +829,6 @@ CostTerms Evaluator::evaluate(double* z, double* grad) {
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
                           [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
   hanging_gradient(z, grad);
-  return cost;
 }
 
 // The separate passes' work, each pass the same body on the same items (so

@@ -69,6 +69,16 @@ class Evaluator {
   // (Evaluator.FusedCostGradientIsTheSeparatePasses).
   void fuse_gradient(bool on) { fused_ = on; }
 
+  // evaluate(z, grad) in two halves, the same numbers bit for bit
+  // (Evaluator.CostThenGradientIsEvaluate): the cost at z, keeping what the
+  // gradient reads (the residuals at z's indices, the elements' slopes);
+  // then the gradient at that z, which must not have changed, with no
+  // other entry point between. Nonlinear CG's line search costs its trials
+  // and takes the gradient of the accepted one only, with no second cost
+  // pass. The unfused evaluate(z, grad) is these two.
+  CostTerms cost_for_gradient(double* z);
+  void gradient_at_last_cost(double* grad);
+
   // Approximate diagonal of J^T J (cost = 1/2 |residuals|^2): the diagonal
   // scaling of the unknowns. Entries of non-unknowns are set to 1.
   void scaling_diagonal(double* z, double* diag);
@@ -299,6 +309,9 @@ class Evaluator {
   // evaluate(z, grad) in one parallel region (fuse_gradient).
   CostTerms fused_cost_gradient(double* z, double* grad);
   bool fused_ = true;
+  // The z of the last cost_for_gradient until its gradient is taken or
+  // evaluate or settled_cost overwrites its numbers (null: none to take).
+  const double* cost_z_ = nullptr;
   template <class Visit>
   void for_gathered(int64_t p, Visit&& visit) const;
   template <class Add>
