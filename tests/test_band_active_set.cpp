@@ -12,6 +12,7 @@
 
 #include "solver/band_active_set.hpp"
 #include "solver/checksum.hpp"
+#include "support/kink_drape.hpp"
 #include "support/scenes.hpp"
 
 namespace drape::test {
@@ -78,46 +79,17 @@ TEST(BandActiveSet, AnElementOnceChangedKeepsItsSecantForTheIteration) {
   EXPECT_FALSE(a.secant(1, 0, &s)) << "a new Newton iteration starts from the tangents";
 }
 
-struct Outcome {
-  std::string checksum;
-  int newton = 0, evaluations = 0, unconverged = 0;
-};
+using Outcome = KinkDrapeOutcome;
 
-// A drape onto a box (contact, the bands loading and reversing), Newton
-// with the multigrid, `steps` steps; with `fixed`, of dt = 4 ms each (the
-// re-solves' linear iterations would otherwise shorten dt, and a shorter
-// step needs fewer Newton iterations for any tangent).
+// The kink drape with or without the active set, `steps` steps; with
+// `fixed`, of dt = 4 ms each (the re-solves' linear iterations would
+// otherwise shorten dt, and a shorter step needs fewer Newton iterations for
+// any tangent).
 Outcome drape(bool active_set, int threads, int steps, bool fixed = false) {
-  Scene s;
-  s.cloth.particles = {17, 17};
-  s.cloth.size = {0.3, 0.3};
-  s.cloth.tile = 5;
-  s.cloth.height = 0.1 + 0.0094 + 0.0005;
-  s.obstacle.center = {0.0, 0.0, 0.05};
-  s.obstacle.size = {0.1, 0.1, 0.1};
-  s.solver.dt = 4e-3;
-  s.solver.dt_max = 0.02;
-  s.solver.drag = 10;
-  s.solver.max_iterations = 300;
-  s.solver.preconditioner = Preconditioner::Multigrid;
+  Scene s = kink_drape_scene(fixed);
   s.solver.band_active_set = active_set;
-  if (fixed) {  // and room for the re-solves' linear iterations
-    s.solver.dt_min = s.solver.dt_max = s.solver.dt;
-    s.solver.max_iterations = 1000;
-  }
-  omp_set_num_threads(threads);
-  Simulation w(s, test_fabric());
-  Outcome out;
-  for (int k = 0; k < steps; ++k) {
-    const StepStats st = w.step();
-    out.newton += st.newton_iterations;
-    out.evaluations += st.evaluations;
-    out.unconverged += st.converged ? 0 : 1;
-  }
-  std::vector<int> all;
-  for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
-  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
-  return out;
+  if (fixed) s.solver.max_iterations = 1000;  // room for the re-solves' linear iterations
+  return run_kink_drape(s, threads, steps);
 }
 
 TEST(NewtonKinks, ActiveSetSameBitsForOneAndTwoThreads) {

@@ -13,6 +13,7 @@
 
 #include "solver/checksum.hpp"
 #include "solver/slope_search.hpp"
+#include "support/kink_drape.hpp"
 #include "support/scenes.hpp"
 
 namespace drape::test {
@@ -86,41 +87,13 @@ TEST(SlopeSearch, CutsBackFromAnOverflow) {
   EXPECT_LE(trials, 4);
 }
 
-struct Outcome {
-  std::string checksum;
-  int newton = 0, evaluations = 0, unconverged = 0;
-};
+using Outcome = KinkDrapeOutcome;
 
-// A drape onto a box (contact, the bands loading and reversing), Newton
-// with the multigrid, `steps` steps.
+// The kink drape with or without the slope search, `steps` steps.
 Outcome drape(bool slope, int threads, int steps, bool fixed_dt = false) {
-  Scene s;
-  s.cloth.particles = {17, 17};
-  s.cloth.size = {0.3, 0.3};
-  s.cloth.tile = 5;
-  s.cloth.height = 0.1 + 0.0094 + 0.0005;
-  s.obstacle.center = {0.0, 0.0, 0.05};
-  s.obstacle.size = {0.1, 0.1, 0.1};
-  s.solver.dt = 4e-3;
-  s.solver.dt_max = fixed_dt ? s.solver.dt : 0.02;
-  if (fixed_dt) s.solver.dt_min = s.solver.dt;
-  s.solver.drag = 10;
-  s.solver.max_iterations = 300;
-  s.solver.preconditioner = Preconditioner::Multigrid;
+  Scene s = kink_drape_scene(fixed_dt);
   s.solver.slope_line_search = slope;
-  omp_set_num_threads(threads);
-  Simulation w(s, test_fabric());
-  Outcome out;
-  for (int k = 0; k < steps; ++k) {
-    const StepStats st = w.step();
-    out.newton += st.newton_iterations;
-    out.evaluations += st.evaluations;
-    out.unconverged += st.converged ? 0 : 1;
-  }
-  std::vector<int> all;
-  for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
-  out.checksum = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
-  return out;
+  return run_kink_drape(s, threads, steps);
 }
 
 TEST(NewtonLineSearch, SlopeSearchSameBitsForOneAndTwoThreads) {
