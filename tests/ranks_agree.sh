@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # End to end: the drape program on 1, 2 and 4 ranks (4 oversubscribed), the
 # cloth split into 25 tiles by METIS, gives the same state checksum and the
-# same drape.h5 datasets, bit for bit, with either solver; and with AMRC on,
+# same drape.h5 datasets and drape.png, bit for bit, with either solver; and with AMRC on,
 # where the 2- and 4-rank runs must have rebalanced (tiles migrated) at
 # least once. The Newton case runs with the KES reversal and air drag on, so
 # the step-start anchors of the ring's elements read the ghosts too; the
@@ -58,6 +58,8 @@ for method in $cases; do
       { echo "$method: zigzag counts (pairs, zigzags) differ: 1 rank $(zz "$work/$method-1"), $n ranks $(zz "$work/$method-$n")"; exit 1; }
     h5diff "$work/$method-1/drape.h5" "$work/$method-$n/drape.h5" /frames /frames ||
       { echo "$method: drape.h5 frames differ between 1 and $n ranks"; exit 1; }
+    cmp -s "$work/$method-1/drape.png" "$work/$method-$n/drape.png" ||
+      { echo "$method: drape.png differs between 1 and $n ranks"; exit 1; }
     if [[ $method == amrc ]]; then
       moved=$(report "$work/$method-$n" 'sum(b["tiles_moved"] for b in r["rebalances"])')
       (( moved > 0 )) || { echo "amrc: no tile migrated on $n ranks: the test does not cover a rebalance"; exit 1; }

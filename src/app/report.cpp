@@ -200,8 +200,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("zigzags", (long long)s.zigzag.zigzags)
       .value("min_turn", kZigzagTurn)
       .end_object();
-  if (is_drape_test(scene)) {  // positions gathered on this rank (Simulation::finish)
-    const DrapeTest t = drape_test(cloth, cloth.x(), scene);
+  if (is_drape_test(scene)) {  // from every rank's cells (Simulation::write_final_state)
+    const DrapeTest& t = s.drape;
     j.value("drape_coefficient", t.coefficient);
     j.value("drape_nodes", t.nodes);
     j.begin_object("drape_areas").value("shadow", t.shadow).value("specimen", t.specimen).value("disc", t.disc).end_object();

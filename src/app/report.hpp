@@ -10,6 +10,7 @@
 #include "decomp/decomposition.hpp"
 #include "decomp/rebalance.hpp"
 #include "io/checkpoint.hpp"
+#include "solver/drape_coefficient.hpp"
 #include "solver/fabric.hpp"
 #include "solver/loops.hpp"
 #include "solver/model.hpp"
@@ -72,6 +73,7 @@ struct Summary {
   bool sequence_cut_short = false;  // at rest on a coarser mesh, with no time left for a finer one
   Zigzag zigzag;                    // kinks at the mesh spacing in the final state
   double penetration_written = 0;  // m: max_penetration_written of the final frame
+  DrapeTest drape;                 // the drape test's figures (rank 0's; a drape test's scene)
   std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)

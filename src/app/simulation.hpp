@@ -123,6 +123,8 @@ class Simulation {
   void summarise();
   void write_final_state(double& depth, std::string& checksum);
   void write_report(double depth, const std::string& checksum);
+  void drape_figures_on_root();  // collective
+  void draw_picture();           // collective
 
   // The program's (the one-rank constructor leaves them as they are).
   clock::time_point t0_ = clock::now();

@@ -5,12 +5,14 @@
 #include <filesystem>
 
 #include "app/memory.hpp"
+#include "app/picture_samples.hpp"
 #include "app/signals.hpp"
 #include "app/simulation.hpp"
 #include "base/error.hpp"
 #include "decomp/collective.hpp"
 #include "decomp/gather.hpp"
 #include "io/atomic_file.hpp"
+#include "io/picture.hpp"
 #include "solver/checksum.hpp"
 #include "solver/drape_coefficient.hpp"
 
@@ -189,13 +191,31 @@ void Simulation::write_final_state(double& depth, std::string& checksum) {
   ScopedPhase ph(tm_, kOutput);
   if (cloth.step != last_frame_) write_frame();  // the final state
   h5_->finish();
-  // The picture and the drape test's shadow read every position on rank 0.
-  if (!scene.output.picture && !is_drape_test(scene)) return;
-  gather_on_root(cloth.x(), 3, tiling, dec_.partition.owner, comm_);
-  if (!scene.output.picture) return;
+  if (is_drape_test(scene)) drape_figures_on_root();
+  if (scene.output.picture) draw_picture();
+}
+
+// Each rank covers its own tiles' cells; rank 0 counts the or of the covers.
+void Simulation::drape_figures_on_root() {
+  DrapeCover cover = drape_cover(cloth, cloth.x(), scene, tiling, dec_.owned);
+  or_on_root(cover.shadow, comm_);
+  or_on_root(cover.specimen, comm_);
+  if (rank_ == 0) sum_.drape = drape_figures(cloth, scene, cover);
+}
+
+// Rank 0 draws from the positions the picture samples, sent by their
+// owners; from the whole cloth only where one of those is not finite (a
+// run that failed).
+void Simulation::draw_picture() {
+  const PicturePlan plan = plan_picture(cloth.grid.ni, cloth.grid.nj, cloth.flags.data());
+  PictureSurface samples;
+  const bool sampled = picture_samples_on_root(plan, cloth.x(), tiling, dec_.partition.owner, comm_, samples);
+  if (!sampled) gather_on_root(cloth.x(), 3, tiling, dec_.partition.owner, comm_);
   on_root_agreed(comm_, [&] {
-    render_picture(frame_of(cloth, blocks_), scene.obstacle, opt_.output_dir + "/drape.png", 1024, 768,
-                   what_was_solved(scene, cloth, sum_, loop->free_particles()));
+    const std::string path = opt_.output_dir + "/drape.png";
+    const std::string what = what_was_solved(scene, cloth, sum_, loop->free_particles());
+    if (sampled) render_picture(samples, scene.obstacle, path, 1024, 768, what);
+    else render_picture(frame_of(cloth, blocks_), scene.obstacle, path, 1024, 768, what);
   });
 }
 

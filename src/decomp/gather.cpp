@@ -41,4 +41,38 @@ void gather_on_root(double* data, int per, const Tiling& tl, const std::vector<i
   }
 }
 
+std::vector<double> gather_listed_on_root(const double* data, int per, const std::vector<int64_t>& listed,
+                                          const Tiling& tl, const std::vector<int>& owner, MPI_Comm comm) {
+  int me = 0, ranks = 1;
+  MPI_Comm_rank(comm, &me);
+  MPI_Comm_size(comm, &ranks);
+  auto from = [&](int64_t p) { return owner[tl.tile_of(p)]; };
+  std::vector<double> mine;
+  std::vector<int> counts(ranks, 0), displs(ranks, 0);
+  for (int64_t p : listed) {
+    counts[from(p)] += per;
+    if (from(p) == me)
+      for (int c = 0; c < per; ++c) mine.push_back(data[p * per + c]);
+  }
+  for (int r = 1; r < ranks; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<double> all(me == 0 ? listed.size() * per : 0);
+  MPI_Gatherv(mine.data(), int(mine.size()), MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0,
+              comm);
+  if (me != 0) return {};
+  // Each rank's values arrive in listed's order: deal them back in place.
+  std::vector<double> out(all.size());
+  std::vector<int> next(displs);
+  for (size_t k = 0; k < listed.size(); ++k) {
+    int& u = next[from(listed[k])];
+    for (int c = 0; c < per; ++c) out[k * per + c] = all[u++];
+  }
+  return out;
+}
+
+void or_on_root(std::vector<uint8_t>& bytes, MPI_Comm comm) {
+  int me = 0;
+  MPI_Comm_rank(comm, &me);
+  MPI_Reduce(me == 0 ? MPI_IN_PLACE : bytes.data(), bytes.data(), int(bytes.size()), MPI_BYTE, MPI_BOR, 0, comm);
+}
+
 }  // namespace drape

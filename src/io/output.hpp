@@ -9,6 +9,7 @@
 #include <string>
 
 #include "io/frame.hpp"
+#include "io/picture.hpp"
 #include "solver/fabric.hpp"
 #include "solver/scene.hpp"
 
@@ -37,10 +38,7 @@ class Hdf5Output {
   std::unique_ptr<Impl> impl_;
 };
 
-// Rank 0 only, full arrays: a shaded picture of the cloth (coloured by height)
-// and the obstacle, seen from above at an angle. Writes path.tmp, renames.
-// A non-empty `description` (printable ASCII) goes into the PNG as a tEXt
-// chunk with the keyword "Description": what the picture shows was solved.
+// Rank 0 only, full arrays: render_picture (io/picture.hpp) of their samples.
 void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std::string& path,
                     int width = 1024, int height = 768, const std::string& description = "");
 

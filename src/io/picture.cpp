@@ -17,6 +17,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/output.hpp"
+#include "io/picture.hpp"
 #include "mesh/cloth.hpp"
 
 namespace drape {
@@ -133,24 +134,16 @@ Surface make_surface(const FrameView& f) {
   return s;
 }
 
-// Indices 0, k, 2k, ... and the last one: at most ~max_points per side.
-std::vector<int> sample(int n, int max_points) {
-  const int step = std::max(1, (n - 1 + max_points - 2) / (max_points - 1));
-  std::vector<int> idx;
-  for (int k = 0; k < n - 1; k += step) idx.push_back(k);
-  idx.push_back(n - 1);
-  return idx;
-}
+V3 point(const PictureSurface& s, size_t k) { return {s.x[3 * k], s.x[3 * k + 1], s.x[3 * k + 2]}; }
 
-// The cloth, subsampled, coloured by height; smooth normals from the grid.
-Mesh cloth_mesh(const Surface& s, Box3& bounds) {
-  const std::vector<int> is = sample(s.ni, 400), js = sample(s.nj, 400);
-  const int mi = int(is.size()), mj = int(js.size());
-  auto at = [&](int a, int b) { return size_t(is[a]) * s.nj + js[b]; };
+// The cloth's samples, coloured by height; smooth normals from the grid.
+Mesh cloth_mesh(const PictureSurface& s, Box3& bounds) {
+  const int mi = s.mi, mj = s.mj;
+  auto at = [&](int a, int b) { return size_t(a) * mj + b; };
   Box3 own;
   for (int a = 0; a < mi; ++a)
     for (int b = 0; b < mj; ++b)
-      if (s.ok[at(a, b)]) own.add(s.x[at(a, b)]);
+      if (s.ok[at(a, b)]) own.add(point(s, at(a, b)));
   if (own.empty()) return {};
   bounds.add(own.lo);
   bounds.add(own.hi);
@@ -163,14 +156,14 @@ Mesh cloth_mesh(const Surface& s, Box3& bounds) {
   std::vector<int> vid(size_t(mi) * mj, -1);
   auto pos = [&](int a, int b, int fa, int fb) {  // neighbour, or self where missing
     const int a2 = std::clamp(a, 0, mi - 1), b2 = std::clamp(b, 0, mj - 1);
-    return s.ok[at(a2, b2)] ? s.x[at(a2, b2)] : s.x[at(fa, fb)];
+    return s.ok[at(a2, b2)] ? point(s, at(a2, b2)) : point(s, at(fa, fb));
   };
   for (int a = 0; a < mi; ++a)
     for (int b = 0; b < mj; ++b) {
       if (!s.ok[at(a, b)]) continue;
       const V3 du = pos(a + 1, b, a, b) - pos(a - 1, b, a, b);
       const V3 dv = pos(a, b + 1, a, b) - pos(a, b - 1, a, b);
-      const V3 q = s.x[at(a, b)];
+      const V3 q = point(s, at(a, b));
       const double t = zhi - zlo > 1e-12 ? (q.z - zlo) / (zhi - zlo) : 0.5;
       vid[size_t(a) * mj + b] = m.add(q, normalized(cross(du, dv)), height_colour(t));
     }
@@ -251,6 +244,117 @@ void add_disc(Mesh& m, const ObstacleSpec& ob, Box3& bounds) {
   bounds.add(c - V3{ob.radius, ob.radius, hz});
   bounds.add(c + V3{ob.radius, ob.radius, hz});
 }
+
+// Indices 0, k, 2k, ... and the last one: at most ~max_points per side.
+std::vector<int> sample(int n, int max_points) {
+  const int step = std::max(1, (n - 1 + max_points - 2) / (max_points - 1));
+  std::vector<int> idx;
+  for (int k = 0; k < n - 1; k += step) idx.push_back(k);
+  idx.push_back(n - 1);
+  return idx;
+}
+
+constexpr int kSamples = 400;  // at most about this many grid lines each way
+
+// The last active column <= j and the next >= j of row i at each sampled
+// column (-1: none), from one sweep each way along the row.
+void row_brackets(const uint8_t* flags, int nj, int i, const std::vector<int>& cols, std::vector<int>& scratch,
+                  int32_t* left, int32_t* right) {
+  const uint8_t* row = flags + int64_t(i) * nj;
+  int last = -1;
+  for (int j = 0; j < nj; ++j) scratch[j] = last = (row[j] & kActive) ? j : last;
+  for (size_t b = 0; b < cols.size(); ++b) left[b] = scratch[cols[b]];
+  last = -1;
+  for (int j = nj - 1; j >= 0; --j) scratch[j] = last = (row[j] & kActive) ? j : last;
+  for (size_t b = 0; b < cols.size(); ++b) right[b] = scratch[cols[b]];
+}
+
+// fill_line's interpolation, for the same operands in the same order.
+V3 between(V3 a, V3 b, int m, int last, int k) { return a + (double(m - last) / (k - last)) * (b - a); }
+
+}  // namespace
+
+PicturePlan plan_picture(int ni, int nj, const uint8_t* flags) {
+  PicturePlan plan;
+  plan.ni = ni;
+  plan.nj = nj;
+  plan.rows = sample(ni, kSamples);
+  plan.cols = sample(nj, kSamples);
+  const int mi = int(plan.rows.size()), mj = int(plan.cols.size());
+  // Rows first: every row's brackets at the sampled columns.
+  std::vector<int32_t> left(size_t(ni) * mj), right(size_t(ni) * mj);
+  std::vector<int> scratch(nj);
+  for (int i = 0; i < ni; ++i) row_brackets(flags, nj, i, plan.cols, scratch, &left[size_t(i) * mj], &right[size_t(i) * mj]);
+  auto row_ok = [&](int i, int b) { return left[size_t(i) * mj + b] >= 0 && right[size_t(i) * mj + b] >= 0; };
+  // Then columns: the nearest rows with a value above and below each sample.
+  plan.source.resize(size_t(mi) * mj);
+  std::vector<int> up(ni), down(ni);
+  for (int b = 0; b < mj; ++b) {
+    int last = -1;
+    for (int i = 0; i < ni; ++i) up[i] = last = row_ok(i, b) ? i : last;
+    last = -1;
+    for (int i = ni - 1; i >= 0; --i) down[i] = last = row_ok(i, b) ? i : last;
+    for (int a = 0; a < mi; ++a) {
+      PictureSource& src = plan.source[size_t(a) * mj + b];
+      const int i = plan.rows[a];
+      if (up[i] < 0 || down[i] < 0) continue;
+      src.il = up[i];
+      src.ir = down[i];
+      const int ends[2] = {src.il, src.ir};
+      for (int e = 0; e < 2; ++e) {
+        src.jl[e] = left[size_t(ends[e]) * mj + b];
+        src.jr[e] = right[size_t(ends[e]) * mj + b];
+        plan.needed.push_back(int64_t(ends[e]) * nj + src.jl[e]);
+        plan.needed.push_back(int64_t(ends[e]) * nj + src.jr[e]);
+      }
+    }
+  }
+  std::sort(plan.needed.begin(), plan.needed.end());
+  plan.needed.erase(std::unique(plan.needed.begin(), plan.needed.end()), plan.needed.end());
+  return plan;
+}
+
+PictureSurface picture_surface(const PicturePlan& plan, const double* values) {
+  const int mi = int(plan.rows.size()), mj = int(plan.cols.size());
+  PictureSurface s{mi, mj, std::vector<double>(3 * size_t(mi) * mj), std::vector<uint8_t>(size_t(mi) * mj)};
+  auto x = [&](int i, int j) {
+    const int64_t p = int64_t(i) * plan.nj + j;
+    const size_t k = size_t(std::lower_bound(plan.needed.begin(), plan.needed.end(), p) - plan.needed.begin());
+    return V3{values[3 * k], values[3 * k + 1], values[3 * k + 2]};
+  };
+  auto row_value = [&](int i, int jl, int jr, int j) {
+    return jl == jr ? x(i, jl) : between(x(i, jl), x(i, jr), j, jl, jr);
+  };
+  for (int a = 0; a < mi; ++a)
+    for (int b = 0; b < mj; ++b) {
+      const size_t k = size_t(a) * mj + b;
+      const PictureSource& src = plan.source[k];
+      if (src.il < 0) continue;
+      const int i = plan.rows[a], j = plan.cols[b];
+      const V3 top = row_value(src.il, src.jl[0], src.jr[0], j);
+      const V3 q = src.il == src.ir ? top : between(top, row_value(src.ir, src.jl[1], src.jr[1], j), i, src.il, src.ir);
+      s.x[3 * k] = q.x, s.x[3 * k + 1] = q.y, s.x[3 * k + 2] = q.z;
+      s.ok[k] = 1;
+    }
+  return s;
+}
+
+PictureSurface picture_surface(const FrameView& f) {
+  const Surface full = make_surface(f);
+  const std::vector<int> rows = sample(f.ni, kSamples), cols = sample(f.nj, kSamples);
+  const int mi = int(rows.size()), mj = int(cols.size());
+  PictureSurface s{mi, mj, std::vector<double>(3 * size_t(mi) * mj), std::vector<uint8_t>(size_t(mi) * mj)};
+  for (int a = 0; a < mi; ++a)
+    for (int b = 0; b < mj; ++b) {
+      const size_t k = size_t(a) * mj + b, p = size_t(rows[a]) * f.nj + cols[b];
+      if (!full.ok[p]) continue;  // undrawn samples hold zeros, as from a plan
+      s.x[3 * k] = full.x[p].x, s.x[3 * k + 1] = full.x[p].y, s.x[3 * k + 2] = full.x[p].z;
+      s.ok[k] = 1;
+    }
+  return s;
+}
+
+namespace {
 
 // --------------------------------------------------------------- camera --
 
@@ -543,14 +647,20 @@ std::string encode_png(const std::vector<uint8_t>& rgb, int w, int h, const std:
 
 void render_picture(const FrameView& f, const ObstacleSpec& obstacle, const std::string& path,
                     int width, int height, const std::string& description) {
+  if (!f.x || f.ni < 2 || f.nj < 2) throw std::runtime_error("picture: no cloth to draw");
+  render_picture(picture_surface(f), obstacle, path, width, height, description);
+}
+
+void render_picture(const PictureSurface& surface, const ObstacleSpec& obstacle, const std::string& path,
+                    int width, int height, const std::string& description) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384)
     throw std::runtime_error("picture: bad size " + std::to_string(width) + "x" + std::to_string(height));
-  if (!f.x || f.ni < 2 || f.nj < 2) throw std::runtime_error("picture: no cloth to draw");
+  if (surface.mi < 2 || surface.mj < 2) throw std::runtime_error("picture: no cloth to draw");
   // 2x2 supersampling smooths the edges; skipped for huge pictures.
   const int ss = size_t(width) * height <= 4u << 20 ? 2 : 1;
 
   Box3 fit;
-  const Mesh cloth = cloth_mesh(make_surface(f), fit);
+  const Mesh cloth = cloth_mesh(surface, fit);
   Mesh solid;
   if (obstacle.shape == ObstacleShape::Box) add_box(solid, obstacle, fit);
   if (obstacle.shape == ObstacleShape::Sphere) add_sphere(solid, obstacle, fit);

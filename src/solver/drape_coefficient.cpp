@@ -44,17 +44,50 @@ void fill_triangle(Raster& r, const double* a, const double* b, const double* c)
     }
 }
 
-// Every cell of the active mesh: p, its next particles a (along i) and b
-// (along j), and d, next to both.
-void fill_cells(Raster& r, const Cloth& c, const double* x) {
-  for (int64_t p = 0; p < c.grid.n(); ++p) {
-    if (!c.active(p)) continue;
-    const int64_t a = c.next[0][p], b = c.next[1][p];
-    if (a < 0 || b < 0) continue;
-    const int64_t d = c.next[1][a];
-    if (d < 0 || d != c.next[0][b]) continue;
-    fill_triangle(r, x + 3 * p, x + 3 * a, x + 3 * d);
-    fill_triangle(r, x + 3 * p, x + 3 * d, x + 3 * b);
+// The cell of p, if any: p, its next particles a (along i) and b (along j),
+// and d, next to both.
+bool cell_of(const Cloth& c, int64_t p, int64_t& a, int64_t& b, int64_t& d) {
+  if (!c.active(p)) return false;
+  a = c.next[0][p], b = c.next[1][p];
+  if (a < 0 || b < 0) return false;
+  d = c.next[1][a];
+  return d >= 0 && d == c.next[0][b];
+}
+
+// The specimen flat, where make_cloth laid it out.
+void rest_position(const Cloth& c, const ClothSpec& s, int64_t p, double* x) {
+  const Grid& g = c.grid;
+  const int i = int(p / g.nj), j = int(p % g.nj);
+  x[0] = s.center[0] + i * g.hi - 0.5 * s.size[0];
+  x[1] = s.center[1] + j * g.hj - 0.5 * s.size[1];
+  x[2] = 0;
+}
+
+// The cells of the particles of `tiles`, two triangles each: at positions x,
+// or at rest (x null).
+void fill_cells(Raster& r, const Cloth& c, const double* x, const ClothSpec& spec, const Tiling& tiling,
+                const std::vector<int>& tiles) {
+  double rest[4][3];
+  for (int t : tiles) {
+    const TileRange g = tiling.range(t);
+    for (int i = g.i0; i < g.i1; ++i)
+      for (int j = g.j0; j < g.j1; ++j) {
+        const int64_t p = c.grid.id(i, j);
+        int64_t corner[4];
+        if (!cell_of(c, p, corner[1], corner[3], corner[2])) continue;
+        corner[0] = p;
+        const double* q[4];
+        for (int k = 0; k < 4; ++k) {
+          if (x) {
+            q[k] = x + 3 * corner[k];
+          } else {
+            rest_position(c, spec, corner[k], rest[k]);
+            q[k] = rest[k];
+          }
+        }
+        fill_triangle(r, q[0], q[1], q[2]);
+        fill_triangle(r, q[0], q[2], q[3]);
+      }
   }
 }
 
@@ -64,19 +97,6 @@ void fill_disc(Raster& r, const ObstacleSpec& o) {
       const double dx = r.centre_x(i) - o.center[0], dy = r.centre_y(j) - o.center[1];
       if (dx * dx + dy * dy <= o.radius * o.radius) r.on[size_t(i) * r.n + j] = 1;
     }
-}
-
-// The specimen flat, where make_cloth laid it out.
-std::vector<double> rest_positions(const Cloth& c, const ClothSpec& s) {
-  const Grid& g = c.grid;
-  std::vector<double> x(3 * g.n(), 0.0);
-  for (int i = 0; i < g.ni; ++i)
-    for (int j = 0; j < g.nj; ++j) {
-      const int64_t p = g.id(i, j);
-      x[3 * p + 0] = s.center[0] + i * g.hi - 0.5 * s.size[0];
-      x[3 * p + 1] = s.center[1] + j * g.hj - 0.5 * s.size[1];
-    }
-  return x;
 }
 
 // The shadow's outline radius about (cx, cy) at each whole degree: the last
@@ -125,28 +145,55 @@ bool is_drape_test(const Scene& s) {
   return s.cloth.shape == ClothShape::Disc && s.obstacle.shape == ObstacleShape::Disc;
 }
 
-DrapeTest drape_test(const Cloth& c, const double* x, const Scene& s, int pixels) {
+namespace {
+
+Raster drape_raster(const Scene& s, int pixels) {
   Raster r;
   r.n = pixels;
   const double reach = 1.1 * 0.5 * std::max(s.cloth.size[0], s.cloth.size[1]);
   r.h = 2 * reach / pixels;
   r.x0 = s.cloth.center[0] - reach;
   r.y0 = s.cloth.center[1] - reach;
-  DrapeTest t;
   r.on.assign(size_t(pixels) * pixels, 0);
+  return r;
+}
+
+}  // namespace
+
+DrapeCover drape_cover(const Cloth& c, const double* x, const Scene& s, const Tiling& tiling,
+                       const std::vector<int>& tiles, int pixels) {
+  Raster r = drape_raster(s, pixels);
+  DrapeCover cover;
+  fill_cells(r, c, x, s.cloth, tiling, tiles);
+  cover.shadow.swap(r.on);
+  r.on.assign(cover.shadow.size(), 0);
+  fill_cells(r, c, nullptr, s.cloth, tiling, tiles);
+  cover.specimen.swap(r.on);
+  return cover;
+}
+
+DrapeTest drape_figures(const Cloth& c, const Scene& s, DrapeCover& cover, int pixels) {
+  Raster r = drape_raster(s, pixels);
+  DrapeTest t;
   fill_disc(r, s.obstacle);
   t.disc = r.area();
-  fill_cells(r, c, x);
+  r.on.swap(cover.shadow);
+  fill_disc(r, s.obstacle);
   t.shadow = r.area();
   // The cut's staircase alone swings the outline by up to about a spacing.
   const double least_swing = std::max(0.02 * 0.5 * s.cloth.size[0], 2 * std::max(c.grid.hi, c.grid.hj));
   t.nodes = count_nodes(outline(r, s.obstacle.center[0], s.obstacle.center[1]), least_swing);
-  r.on.assign(r.on.size(), 0);
-  fill_cells(r, c, rest_positions(c, s.cloth).data());
+  r.on.swap(cover.specimen);
   fill_disc(r, s.obstacle);
   t.specimen = r.area();
   t.coefficient = t.specimen > t.disc ? (t.shadow - t.disc) / (t.specimen - t.disc) : 0.0;
   return t;
+}
+
+DrapeTest drape_test(const Cloth& c, const double* x, const Scene& s, int pixels) {
+  const Tiling whole(c.grid.ni, c.grid.nj, std::max(c.grid.ni, c.grid.nj));
+  DrapeCover cover = drape_cover(c, x, s, whole, {0}, pixels);
+  return drape_figures(c, s, cover, pixels);
 }
 
 }  // namespace drape

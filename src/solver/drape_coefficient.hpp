@@ -7,7 +7,11 @@
 // xy projection of a mesh cell (two triangles) or of the disc: the flat
 // specimen is the same cells at rest, so a specimen left flat reads 1 and
 // the staircase outline of a cut disc costs nothing.
+#include <cstdint>
+#include <vector>
+
 #include "mesh/cloth.hpp"
+#include "mesh/tiles.hpp"
 #include "solver/scene.hpp"
 
 namespace drape {
@@ -32,5 +36,17 @@ bool is_drape_test(const Scene& s);
 // particle, all of them, e.g. gathered on one rank), rasterised on
 // pixels x pixels over a square of side 2.2 x the specimen's radius.
 DrapeTest drape_test(const Cloth& c, const double* x, const Scene& s, int pixels = 2048);
+
+// The same over ranks: each covers the cells of its own tiles' particles
+// (their corners read from x, its ring's too), the covers are or-ed together
+// (every pixel is a cell's or not, whichever rank drew it: the same raster
+// and areas on any number of ranks), then the figures come from the
+// whole cover (which they take over).
+struct DrapeCover {
+  std::vector<uint8_t> shadow, specimen;  // pixels x pixels, at x and at rest
+};
+DrapeCover drape_cover(const Cloth& c, const double* x, const Scene& s, const Tiling& tiling,
+                       const std::vector<int>& tiles, int pixels = 2048);
+DrapeTest drape_figures(const Cloth& c, const Scene& s, DrapeCover& cover, int pixels = 2048);
 
 }  // namespace drape
