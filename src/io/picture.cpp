@@ -427,8 +427,12 @@ struct Light {
   }
 };
 
+// A strip of the supersampled picture: rows y0 to y0 + h - 1 of `full`
+// rows, each w pixels. Drawn a strip at a time, so that the picture's
+// floats never span the whole picture; a pixel's colour does not depend on
+// the strip it is drawn in.
 struct Image {
-  int w, h;
+  int w, h, y0, full;
   std::vector<Rgb> rgb;
   std::vector<float> inv_depth;  // 1/depth; 0 = nothing drawn (far)
 };
@@ -448,8 +452,8 @@ void draw_triangle(Image& img, const Mesh& m, const std::array<int, 3>& t,
   if (std::abs(area) < 1e-12) return;
   const int x0 = std::max(0, int(std::floor(std::min({a.x, b.x, c.x}))));
   const int x1 = std::min(img.w - 1, int(std::ceil(std::max({a.x, b.x, c.x}))));
-  const int y0 = std::max(0, int(std::floor(std::min({a.y, b.y, c.y}))));
-  const int y1 = std::min(img.h - 1, int(std::ceil(std::max({a.y, b.y, c.y}))));
+  const int y0 = std::max(img.y0, int(std::floor(std::min({a.y, b.y, c.y}))));
+  const int y1 = std::min(img.y0 + img.h - 1, int(std::ceil(std::max({a.y, b.y, c.y}))));
   if (x0 > x1 || y0 > y1) return;
   const double inv_area = 1.0 / area;
   for (int y = y0; y <= y1; ++y) {
@@ -461,7 +465,7 @@ void draw_triangle(Image& img, const Mesh& m, const std::array<int, 3>& t,
       const double wc = 1.0 - wa - wb;
       if (wa < 0 || wb < 0 || wc < 0) continue;
       const double iz = wa * a.iz + wb * b.iz + wc * c.iz;
-      const size_t k = size_t(y) * img.w + x;
+      const size_t k = size_t(y - img.y0) * img.w + x;
       if (iz <= img.inv_depth[k]) continue;
       img.inv_depth[k] = float(iz);
       // Perspective-correct weights.
@@ -475,13 +479,17 @@ void draw_triangle(Image& img, const Mesh& m, const std::array<int, 3>& t,
   }
 }
 
-void draw_mesh(Image& img, const Mesh& m, const Camera& cam, const Light& light) {
+std::vector<ScreenVert> on_screen(const Mesh& m, const Camera& cam) {
   std::vector<ScreenVert> sv(m.p.size());
   for (size_t v = 0; v < m.p.size(); ++v) {
     double d = 0;
     sv[v].visible = cam.project(m.p[v], sv[v].x, sv[v].y, d);
     sv[v].iz = sv[v].visible ? 1.0 / d : 0;
   }
+  return sv;
+}
+
+void draw_mesh(Image& img, const Mesh& m, const std::vector<ScreenVert>& sv, const Light& light) {
   for (const auto& t : m.tri) draw_triangle(img, m, t, sv, light);
 }
 
@@ -551,10 +559,10 @@ void draw_floor(Image& img, const Camera& cam, const Box3& fit, const ShadowMap&
   const double span = std::max(fit.hi.x - fit.lo.x, fit.hi.y - fit.lo.y) + 1e-9;
   const double tile = std::pow(10.0, std::floor(std::log10(span / 5)));
   const double fade0 = 0.9 * span, fade1 = 2.2 * span;
-  for (int y = 0; y < img.h; ++y)
+  for (int y = img.y0; y < img.y0 + img.h; ++y)
     for (int x = 0; x < img.w; ++x) {
-      const size_t k = size_t(y) * img.w + x;
-      const Rgb bg = background(y, img.h);
+      const size_t k = size_t(y - img.y0) * img.w + x;
+      const Rgb bg = background(y, img.full);
       img.rgb[k] = bg;
       img.inv_depth[k] = 0;
       if (!floor) continue;
@@ -573,10 +581,9 @@ void draw_floor(Image& img, const Camera& cam, const Box3& fit, const ShadowMap&
     }
 }
 
-// Averages s x s blocks into 8-bit RGB.
-std::vector<uint8_t> downsample(const Image& img, int s) {
+// Averages s x s blocks into 8-bit RGB: the strip's rows of `out`.
+void downsample(const Image& img, int s, std::vector<uint8_t>& out) {
   const int w = img.w / s, h = img.h / s;
-  std::vector<uint8_t> out(size_t(w) * h * 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       double r = 0, g = 0, b = 0;
@@ -586,12 +593,11 @@ std::vector<uint8_t> downsample(const Image& img, int s) {
           r += c.r, g += c.g, b += c.b;
         }
       const double norm = 255.0 / (s * s);
-      uint8_t* o = &out[(size_t(y) * w + x) * 3];
+      uint8_t* o = &out[(size_t(img.y0 / s + y) * w + x) * 3];
       o[0] = uint8_t(std::clamp(r * norm + 0.5, 0.0, 255.0));
       o[1] = uint8_t(std::clamp(g * norm + 0.5, 0.0, 255.0));
       o[2] = uint8_t(std::clamp(b * norm + 0.5, 0.0, 255.0));
     }
-  return out;
 }
 
 // ------------------------------------------------------------------ PNG --
@@ -667,19 +673,26 @@ void render_picture(const PictureSurface& surface, const ObstacleSpec& obstacle,
   if (obstacle.shape == ObstacleShape::Disc) add_disc(solid, obstacle, fit);
   if (fit.empty()) fit.add(V3{0, 0, 0});
 
-  Image img{width * ss, height * ss, {}, {}};
-  img.rgb.resize(size_t(img.w) * img.h);
-  img.inv_depth.resize(size_t(img.w) * img.h);
-  const Camera cam = frame_camera(fit, img.w, img.h);
+  const int w = width * ss, h = height * ss;
+  const Camera cam = frame_camera(fit, w, h);
   // Light from above the camera's shoulder, a little to its left.
   Light light;
   light.view = -1.0 * cam.fwd;
   light.dir = normalized(light.view + 0.8 * V3{0, 0, 1} - 0.35 * cam.right);
 
-  draw_floor(img, cam, fit, shadow_map({&cloth, &solid}, fit), obstacle.floor);
-  draw_mesh(img, solid, cam, light);
-  draw_mesh(img, cloth, cam, light);
-  write_file_atomically(path, encode_png(downsample(img, ss), width, height, description));
+  const ShadowMap shadow = shadow_map({&cloth, &solid}, fit);
+  const std::vector<ScreenVert> solid_sv = on_screen(solid, cam), cloth_sv = on_screen(cloth, cam);
+  std::vector<uint8_t> rgb(size_t(width) * height * 3);
+  const int rows = 32 * ss;  // a strip: a whole number of output rows
+  Image img{w, 0, 0, h, std::vector<Rgb>(size_t(w) * rows), std::vector<float>(size_t(w) * rows)};
+  for (img.y0 = 0; img.y0 < h; img.y0 += rows) {
+    img.h = std::min(rows, h - img.y0);
+    draw_floor(img, cam, fit, shadow, obstacle.floor);
+    draw_mesh(img, solid, solid_sv, light);
+    draw_mesh(img, cloth, cloth_sv, light);
+    downsample(img, ss, rgb);
+  }
+  write_file_atomically(path, encode_png(rgb, width, height, description));
 }
 
 }  // namespace drape
