@@ -3,7 +3,8 @@
 # owners send, is the same file on 1, 2 and 3 ranks: a box drape under AMRC
 # (coarse cells' particles filled along grid lines) and the Cusick drape
 # test, whose report.json figures (from the ranks' shadow rasters or-ed
-# together) must agree too.
+# together) must agree too; and rank 0 receives only the positions the
+# picture samples (report.json's picture_positions), not the whole cloth.
 # Usage: picture_ranks_np3.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
@@ -33,3 +34,15 @@ for scene in box cusick; do
   done
 done
 echo "cusick: $(figures "$work/cusick-1") on 1, 2 and 3 ranks"
+# A long strip of 801 x 9 particles: the picture samples 268 of its 801
+# rows, and rank 0 receives their positions alone, on any number of ranks.
+strip=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[801,9]" --set "cloth.size=[1.6,0.016]"
+       --set cloth.tile=40 --set solver.steps=1 --set output.every=0)
+for n in 1 2 3; do
+  OMP_NUM_THREADS=1 "$mpiexec" -n $n "$drape" "${strip[@]}" --quiet --output "$work/strip-$n"
+  got=$(field "$work/strip-$n" picture_positions)
+  (( got > 0 && got <= 268 * 9 )) ||
+    { echo "strip: rank 0 received $got positions on $n ranks, not the 268 x 9 sampled"; exit 1; }
+  cmp "$work/strip-1/drape.png" "$work/strip-$n/drape.png" || { echo "strip: drape.png differs on $n ranks"; exit 1; }
+done
+echo "strip: rank 0 received $got of the 801 x 9 positions on 1, 2 and 3 ranks"

@@ -193,6 +193,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("rest_speed", scene.solver.rest_speed);
   j.value("max_penetration", penetration_depth);  // over the solved particles
   j.value("max_penetration_written", s.penetration_written);  // over the written surface
+  j.value("picture_positions", (long long)s.picture_positions);  // rank 0's, for drape.png
   j.value("projections", (long long)n.projections);
   j.begin_object("zigzag")
       .value("share", s.zigzag.share())

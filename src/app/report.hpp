@@ -74,6 +74,7 @@ struct Summary {
   Zigzag zigzag;                    // kinks at the mesh spacing in the final state
   double penetration_written = 0;  // m: max_penetration_written of the final frame
   DrapeTest drape;                 // the drape test's figures (rank 0's; a drape test's scene)
+  int64_t picture_positions = 0;   // the positions rank 0 received to draw the picture
   std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)

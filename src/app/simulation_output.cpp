@@ -209,8 +209,10 @@ void Simulation::drape_figures_on_root() {
 void Simulation::draw_picture() {
   const PicturePlan plan = plan_picture(cloth.grid.ni, cloth.grid.nj, cloth.flags.data());
   PictureSurface samples;
-  const bool sampled = picture_samples_on_root(plan, cloth.x(), tiling, dec_.partition.owner, comm_, samples);
+  size_t values = 0;
+  const bool sampled = picture_samples_on_root(plan, cloth.x(), tiling, dec_.partition.owner, comm_, samples, &values);
   if (!sampled) gather_on_root(cloth.x(), 3, tiling, dec_.partition.owner, comm_);
+  sum_.picture_positions = sampled ? int64_t(values / 3) : cloth.grid.n();
   on_root_agreed(comm_, [&] {
     const std::string path = opt_.output_dir + "/drape.png";
     const std::string what = what_was_solved(scene, cloth, sum_, loop->free_particles());
