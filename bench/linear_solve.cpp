@@ -5,17 +5,25 @@
 // are reported side by side (ratios from one run).
 // Kernel timings are the calling thread's CPU seconds (one thread by default).
 //   linear_solve [--size 129] [--time 0.12] [--dt 5e-4] [--steps 5] [--threads 1] [--sweep] [--modes] [--out FILE.json]
+//     [--counts] [--stretch-reversal R] [--bend-scale F] [--floor-only] [--contact-scale F] [--solve-dt S...]
 //     [--fitted [--fit-vectors 8] [--fit-sweeps 30] [--fit-ratio 30] [--fit-cycles 0] [--fit-levels N]
 //      [--fit-tikhonov 1e-3] [--fit-wide] [--fit-free-sums] [--fit-full-blocks] [--two-grid 1] [--two-grid-cubic]]
 // --fitted: the bilinear against the fitted P only, with how well each
 // interpolates the test vectors; --two-grid, --two-grid-cubic: two-grid
 // cycles on the finest level with richer coarse spaces (experiments).
+// Which physics makes the multigrid's count grow: --counts solves once with
+// the bilinear V-cycle, point and line smoothing, and nothing else; the
+// scene's stretch reversal (band kinks), the fabric's bending (both change
+// the state reached) and a floor-only scene (contact without hanging sides)
+// are set before stepping; the contact stiffness and the solve's dt (the
+// mass term) are changed at the state, so that only the operator differs.
 #include <omp.h>
 
 #include <ctime>
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -37,6 +45,7 @@ const char* name(Interpolation ip) {
 // bilinear and fitted P are compared (--fitted).
 MultigridSettings fit_settings;
 bool fitted_only = false;
+bool counts_only = false;
 int two = 0;
 bool cubic = false;
 
@@ -354,6 +363,40 @@ void two_grid_cubic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n
   }
 }
 
+// One solve to 1e-8 from the state with preconditioner pc (multigrid
+// settings ms): the iterations; CPU seconds (set-up and solve) in *cpu.
+int one_solve(Simulation& w, Preconditioner pc, const MultigridSettings& ms, Timers& t, double* cpu) {
+  SolverSpec spec = w.scene.solver;
+  spec.preconditioner = pc;
+  TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red(), spec);
+  loop.newton().set_multigrid(ms);
+  double* z = w.cloth.z.data();
+  loop.evaluator().settled_cost(z);
+  const std::clock_t c0 = std::clock();
+  const int its = loop.newton().linear_solve(loop.evaluator(), z, 5000, 1e-8, t);
+  *cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+  return its;
+}
+
+// --counts: the bilinear V-cycle's iterations with point smoothing, line
+// smoothing on every level, and lines on the finest one or two only.
+void counts(Simulation& w) {
+  MultigridSettings point, line, line1, line2;
+  line.smoothing = line1.smoothing = line2.smoothing = Smoothing::Line;
+  line1.line_levels = 1;
+  line2.line_levels = 2;
+  const std::pair<const char*, MultigridSettings> cases[] = {
+      {"point smoothing", point}, {"line smoothing", line}, {"lines on the finest level", line1},
+      {"lines on the 2 finest levels", line2}};
+  for (const auto& [label, ms] : cases) {
+    Timers t;
+    double cpu = 0;
+    const int its = one_solve(w, Preconditioner::Multigrid, ms, t, &cpu);
+    std::printf("counts: %s %d iterations, cpu %.3f s\n", label, its, cpu);
+  }
+  std::fflush(stdout);
+}
+
 // What one preconditioned iteration and one set-up cost, in stiffness
 // products: assembling K, the levels' set-up, a V-cycle, K's block product.
 void kernel_times(Simulation& w, bool modes) {
@@ -465,19 +508,13 @@ void kernel_times(Simulation& w, bool modes) {
   for (const OneSolve& o : solves) {
     const bool fit = o.ip == Interpolation::Fitted;
     if (fitted_only && !fit && std::string(o.name) != "multigrid bilinear") continue;
-    SolverSpec spec = w.scene.solver;
-    spec.preconditioner = o.pc;
-    TimeLoop loop(w.cloth, w.model, w.lists, w.tiling, w.policy, w.red(), spec);
     MultigridSettings ms = fit ? fit_settings : MultigridSettings{};
     ms.interpolation = o.ip;
     if (!fit) ms.smoothed_levels = o.smoothed_levels;
     ms.smoothing = o.sm;
-    loop.newton().set_multigrid(ms);
     Timers t;
-    loop.evaluator().settled_cost(z);
-    const std::clock_t c0 = std::clock();
-    const int its = loop.newton().linear_solve(loop.evaluator(), z, 5000, 1e-8, t);
-    const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+    double cpu = 0;
+    const int its = one_solve(w, o.pc, ms, t, &cpu);
     std::printf("one solve to 1e-8, %-30s %4d iterations, cpu %.3f s (wall: set-up+diagonal %.3f, precondition %.3f)\n",
                 (std::string(o.name) + ":").c_str(), its, cpu, t.seconds[kScaling], t.seconds[kPrecondition]);
   }
@@ -502,6 +539,16 @@ int run(int argc, char** argv) {
   app.add_option("--two-grid", two, "with --fitted: two-grid cycles with P0, and P0 plus 3 x this many vectors per coarse point")
       ->check(CLI::Range(0, 4));
   app.add_flag("--two-grid-cubic", cubic, "with --fitted: two-grid cycles with bilinear and cubic P");
+  double reversal = -1, bend_scale = 1, contact_scale = 1;
+  std::vector<double> solve_dts;
+  bool floor_only = false;
+  app.add_flag("--counts", counts_only, "one solve with the bilinear V-cycle: point smoothing, lines on every level, on the 1 and 2 finest; nothing else");
+  app.add_option("--stretch-reversal", reversal, "cloth.stretch_reversal (1: no kinks inside the bands)")->check(CLI::Range(0.0, 1e3));
+  app.add_option("--bend-scale", bend_scale, "the fabric's bending (B and 2HB) times this")->check(CLI::Range(0.0, 1e6));
+  app.add_flag("--floor-only", floor_only, "no box: the cloth 5 cm above the floor (lands at the same time)");
+  app.add_option("--contact-scale", contact_scale, "at the state: the contact stiffness times this")->check(CLI::Range(0.0, 1e6));
+  app.add_option("--solve-dt", solve_dts, "at the state: the solve's dt, s (the mass term; several: --counts for each)")
+      ->check(CLI::Range(1e-7, 1.0));
   app.add_option("--fit-vectors", fit_settings.fit_vectors, "fitted P: test vectors")->check(CLI::Range(1, 64));
   app.add_option("--fit-sweeps", fit_settings.fit_sweeps, "fitted P: degree of their relaxation")->check(CLI::Range(1, 1000));
   app.add_option("--fit-ratio", fit_settings.fit_ratio, "fitted P: the relaxation damps [lmax / ratio, lmax]");
@@ -520,9 +567,31 @@ int run(int argc, char** argv) {
   fit_settings.fit_wide = wide;
   fit_settings.fit_keep_sums = !free_sums;
   omp_set_num_threads(threads);
-  const Scene scene = landing_scene(n, dt);
-  Simulation w(scene, load_fabric(scene.cloth.fabric));
+  Scene scene = landing_scene(n, dt);
+  if (reversal >= 0) scene.cloth.stretch_reversal = reversal;
+  if (floor_only) {
+    scene.obstacle.shape = ObstacleShape::None;
+    scene.cloth.height = 0.05;
+  }
+  Fabric fabric = load_fabric(scene.cloth.fabric);
+  for (BendingKES& b : fabric.bending) {
+    b.b *= bend_scale;
+    b.hb *= bend_scale;
+  }
+  Simulation w(scene, fabric);
   step_to(w, time);
+  w.model.contact.stiffness *= contact_scale;
+  if (counts_only) {
+    for (size_t k = 0; k < std::max<size_t>(1, solve_dts.size()); ++k) {
+      if (!solve_dts.empty()) {
+        w.model.dt = w.model.dt_prev = solve_dts[k];
+        std::printf("solve dt %g s\n", solve_dts[k]);
+      }
+      counts(w);
+    }
+    return 0;
+  }
+  if (!solve_dts.empty()) w.model.dt = w.model.dt_prev = solve_dts[0];
   kernel_times(w, modes);
   const Cloth saved = w.cloth;
   const Model saved_model = w.model;

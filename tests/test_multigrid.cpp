@@ -371,6 +371,72 @@ TEST(Multigrid, LineSmoothingKeepsAnisotropicIterationsFlat) {
   EXPECT_GT(point[2], point[0]);
 }
 
+// A membrane's in-plane operator on an n x n grid of unit size, free
+// edges: x couples along i with `stretch` and along j with 1 (the shear),
+// y the other way round, z with 1 both ways (the tension), and every point
+// carries a mass term mass * h^2 (a particle's mass over dt^2, h the
+// spacing). At a fixed dt the mass term shrinks against the h-independent
+// couplings as the grid is refined: the coarse grids are mass-dominated and
+// isotropic, the fine ones stretch-dominated and anisotropic.
+BlockMatrix membrane_operator(int n, double stretch, double mass) {
+  const std::vector<int64_t> ids = all_points(int64_t(n) * n);
+  const BlockMatrix L = grid_laplacian(ids, n);  // the pattern
+  BlockMatrix A = L;
+  std::fill(A.val.begin(), A.val.end(), 0.0);
+  const double h = 1.0 / (n - 1);
+  for (int64_t r = 0; r < A.rows; ++r) {
+    double* d = A.block(r, int32_t(r));
+    for (int k = 0; k < 3; ++k) d[4 * k] = mass * h * h;
+    for (int64_t q = A.start[r]; q < A.start[r + 1]; ++q) {
+      if (A.col[q] == r) continue;
+      const bool along_i = A.col[q] / n != r / n;
+      const double w[3] = {along_i ? stretch : 1.0, along_i ? 1.0 : stretch, 1.0};
+      for (int k = 0; k < 3; ++k) {
+        A.val[9 * q + 4 * k] = -w[k];
+        d[4 * k] += w[k];
+      }
+    }
+  }
+  return A;
+}
+
+// PCG to 1e-8 on the membrane (stretch 100, about the drape's in-plane
+// stiffness against its shear; mass 1e4: mass-dominated at 33). Point
+// smoothing's count grows as the mass term fades against the stretch with
+// the spacing (the drape's growth: its count follows dt / h); lines on
+// every level keep it low and flat. Lines on the finest level alone do not:
+// below it the levels are stretch-dominated still (the Galerkin mass term
+// gains only 4 times a level).
+TEST(Multigrid, LinesKeepAFadingMassTermFlat) {
+  const int sizes[] = {33, 65, 129};
+  std::vector<int> point, finest, every;
+  for (int n : sizes) {
+    const BlockMatrix A = membrane_operator(n, 100.0, 1e4);
+    const std::vector<int64_t> ids = all_points(int64_t(n) * n);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<double> b(3 * ids.size());
+    for (double& v : b) v = u(rng);
+    for (int lines : {0, 1, 1000}) {
+      MultigridSettings st;
+      st.smoothing = lines > 0 ? Smoothing::Line : Smoothing::Point;
+      st.line_levels = lines;
+      Multigrid mg(st);
+      mg.setup(A, ids, n, n, 1);
+      EXPECT_GE(mg.levels(), 3);
+      const int its = pcg(A, b, [&](const double* r, double* x) { mg.apply(r, x); }, 1e-8);
+      (lines == 0 ? point : lines == 1 ? finest : every).push_back(its);
+    }
+  }
+  for (size_t k = 0; k < point.size(); ++k)
+    std::printf("membrane at %d: point smoothing %d iterations, lines on the finest level %d, on every level %d\n",
+                sizes[k], point[k], finest[k], every[k]);
+  EXPECT_GE(point[2], 1.8 * point[0]);  // the fading mass term is what makes it grow
+  EXPECT_LE(every[2], 8);
+  EXPECT_GE(point[2], 5 * every[2]);
+  EXPECT_GT(finest[2], every[2]);  // line_levels does limit the lines
+}
+
 // The Laplacian with its couplings along i made positive: S L S, S = +1 on
 // even i and -1 on odd i. Its near-null vectors are S times smooth ones,
 // which change sign every particle along i: bilinear interpolation from the

@@ -49,6 +49,7 @@ void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
     L.b.assign(n, 0.0);
     L.x.assign(n, 0.0);
     L.r.assign(n, 0.0);
+    L.lines = s_.smoothing == Smoothing::Line && int(l) < s_.line_levels;
     stats_[l].points = int64_t(L.ids.size());
     stats_[l].stride = L.stride;
   }
@@ -68,8 +69,8 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
     if (l > 0) galerkin(matrix(l - 1), levels_[l - 1].transfer(), levels_[l - 1].AP, levels_[l].A, fresh);
     Level& L = levels_[l];
     if (l < last) {
-      if (s_.smoothing == Smoothing::Line) L.line.setup(matrix(l), L.ids, ni, nj, L.stride, fresh);
-      if (s_.smoothing == Smoothing::Point || L.smoothed) L.smoother.setup(matrix(l), s_.degree, s_.ratio);
+      if (L.lines) L.line.setup(matrix(l), L.ids, ni, nj, L.stride, fresh);
+      if (!L.lines || L.smoothed) L.smoother.setup(matrix(l), s_.degree, s_.ratio);
       if (L.smoothed)
         smooth_prolongation(matrix(l), L.smoother.dinv(), L.smoother.estimate(), L.P0, L.AP0, L.P, fresh);
       if (L.fitted) fit(l);
@@ -158,7 +159,7 @@ namespace drape {
 // Pre-smoothing from x = 0; post-smoothing the adjoint (the line sweeps
 // reversed): the cycle is symmetric.
 void Multigrid::smooth(Level& L, const BlockMatrix& A, const double* b, double* x, bool pre) {
-  if (s_.smoothing == Smoothing::Line) L.line.smooth(A, b, x, pre, pre, s_.line_sweeps);
+  if (L.lines) L.line.smooth(A, b, x, pre, pre, s_.line_sweeps);
   else L.smoother.smooth(A, b, x, pre);
 }
 

@@ -52,6 +52,10 @@ struct MultigridSettings {
   int fit_cycles = 0;
   Smoothing smoothing = Smoothing::Point;
   int line_sweeps = 1;  // line smoothing: sweeps (i-lines, then j-lines) before and after the coarse correction
+  // Line smoothing on this many finest levels, the point smoother below:
+  // the coarse levels' operators are averaged over 2^l particles and lines
+  // there cost more than they save.
+  int line_levels = 1000;
 };
 
 struct MultigridLevelStats {
@@ -97,6 +101,7 @@ class Multigrid {
     BlockMatrix AP0, AP;       // A P0 and A P: the products' workspaces
     bool smoothed = false, fitted = false;
     const Prolongation& transfer() const { return smoothed || fitted ? P : P0; }
+    bool lines = false;  // smoothed by lines (else the point Chebyshev)
     Chebyshev smoother;
     Chebyshev relax;                 // fitted: the test vectors' relaxation
     std::vector<int64_t> fine_row;   // fitted: the next level's points' rows here
