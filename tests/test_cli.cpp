@@ -505,9 +505,11 @@ TEST(CliBad, MoreRanksThanTiles) {
 }
 
 // The multigrid preconditioner runs on one rank.
-TEST(CliBad, MultigridOnTwoRanks) {
-  expect_refused_on_two_ranks("mg-ranks", "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"'",
-                              "solver.preconditioner = \"multigrid\" runs on one rank only");
+TEST(CliBad, MultigridWithAmrcOnTwoRanks) {
+  expect_refused_on_two_ranks("mg-ranks",
+                              "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"' "
+                              "--set amrc.enabled=true",
+                              "with amrc.enabled = true runs on one rank only");
 }
 
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a
