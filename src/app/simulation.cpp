@@ -70,6 +70,10 @@ void Simulation::refuse_unsupported() const {
     throw InputError("solver.preconditioner = \"multigrid\" with amrc.enabled = true runs on one rank only "
                      "(K's rows do not yet reach another rank's hanging particles); run it without mpirun "
                      "or use \"jacobi\"");
+  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && sv.self_contact)
+    throw InputError("solver.preconditioner = \"multigrid\" with solver.self_contact = true runs on one rank "
+                     "only (K's contact blocks across ranks are not yet checked against one rank's); run it "
+                     "without mpirun or use \"jacobi\"");
 }
 
 // The cloth, new or the checkpoint's, on its first mesh.

@@ -102,7 +102,7 @@ void declare_solver(ParameterList& list) {
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
            "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; "
            "on several ranks the levels are built from all ranks' rows and run on every rank alike, bitwise one rank's "
-           "result; not with AMRC on several ranks) ([design.md §7](design.md))")
+           "result; not with AMRC or self-contact on several ranks) ([design.md §7](design.md))")
           .example("multigrid")
       .add("newton_target", &SolverSpec::newton_target, "", at_least(1),
            "multigrid: Newton iterations per step that dt grows under",
