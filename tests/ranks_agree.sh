@@ -16,8 +16,9 @@
 # computes for its own particles): it must do so at least once. The
 # multigrid case is the Newton case with the multigrid preconditioner,
 # whose levels every rank builds from all ranks' rows of K (gathered in one
-# rank's order); it runs on 2 (with 2 threads a rank), 3 and 4 ranks, and
-# its V-cycles must have run.
+# rank's order); it runs on 2 (with 2 threads a rank), 3 and 4 ranks, its
+# V-cycles must have run, and a 2-rank run stopped at step 20 and continued
+# on 3 ranks must end in the same state.
 # Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR [CASES]
 # (CASES: some of the cases below, space-separated; default all but amrc_edges,
 # kinks and multigrid, which ctest runs as tests of their own)
@@ -84,6 +85,13 @@ for method in $cases; do
     cycles=$(report "$work/multigrid-4" 'r["multigrid"][0]["cycles"] if r["multigrid"] else 0')
     (( cycles > 0 )) || { echo "multigrid: no V-cycle ran on 4 ranks"; exit 1; }
     echo "multigrid: $cycles V-cycles on 4 ranks"
+    # Stopped at step 20 on 2 ranks, continued on 3: the uninterrupted run's state.
+    OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${args[@]}" --set solver.steps=20 --set output.checkpoint_every=20 \
+      --output "$work/multigrid-restart"
+    OMP_NUM_THREADS=1 "$mpiexec" -n 3 "$drape" --restart "$work/multigrid-restart/checkpoint.h5" --set solver.steps=40 --quiet
+    [[ $(sum "$work/multigrid-restart") == $(sum "$work/multigrid-1") ]] ||
+      { echo "multigrid: 2 ranks to step 20, then 3 ranks: $(sum "$work/multigrid-restart"), not $(sum "$work/multigrid-1")"; exit 1; }
+    echo "multigrid: restarted on 3 ranks from 2 ranks' step 20: the same state"
   fi
   if [[ $method == kinks ]]; then
     "$drape" "${args[@]}" --set solver.band_active_set=false --output "$work/kinks-off" >/dev/null
