@@ -13,10 +13,15 @@
 # for its own particles only: it must hold back some merges. The amrc_edges
 # case starts on coarse deflection leaves, so that leaves across the box's
 # edges cut into it and split for that (the inside mask, which each rank
-# computes for its own particles): it must do so at least once.
+# computes for its own particles): it must do so at least once. The
+# multigrid case is the Newton case with the multigrid preconditioner,
+# whose levels every rank builds from all ranks' rows of K (gathered in one
+# rank's order); it runs on 2 (with 2 threads a rank), 3 and 4 ranks, its
+# V-cycles must have run, and a 2-rank run stopped at step 20 and continued
+# on 3 ranks must end in the same state.
 # Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR [CASES]
-# (CASES: some of the cases below, space-separated; default all but amrc_edges
-# and kinks, which ctest runs as tests of their own)
+# (CASES: some of the cases below, space-separated; default all but amrc_edges,
+# kinks and multigrid, which ctest runs as tests of their own)
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton slope cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
@@ -42,14 +47,20 @@ for method in $cases; do
     sequence) args+=("${sequence[@]}") ;;
     slope) args+=(--set solver.method=newton --set solver.slope_line_search=true) ;;
     kinks) args+=(--set solver.method=newton --set solver.band_active_set=true) ;;
+    multigrid) args+=(--set solver.method=newton --set 'solver.preconditioner="multigrid"') ;;
     *) args+=(--set solver.method=$method) ;;
   esac
-  if [[ $method == newton || $method == slope || $method == kinks ]]; then
+  if [[ $method == newton || $method == slope || $method == kinks || $method == multigrid ]]; then
     args+=(--set cloth.bend_reversal=5 --set cloth.shear_reversal=3 --set cloth.stretch_reversal=2 --set solver.drag=3 --set cloth.height=0.43)
   fi
   OMP_NUM_THREADS=1 "$drape" "${args[@]}" --output "$work/$method-1"
-  for n in 2 4; do
-    OMP_NUM_THREADS=1 "$mpiexec" -n $n "$drape" "${args[@]}" --output "$work/$method-$n"
+  counts="2 4" threads=1
+  [[ $method == multigrid ]] && counts="2 3 4"
+  for n in $counts; do
+    threads=1
+    [[ $method == multigrid && $n == 2 ]] && threads=2
+    # Passive waits: 2 ranks of 2 spinning threads on 2 shared cores crawl.
+    OMP_WAIT_POLICY=passive OMP_NUM_THREADS=$threads "$mpiexec" -n $n "$drape" "${args[@]}" --output "$work/$method-$n"
     one=$(sum "$work/$method-1") many=$(sum "$work/$method-$n")
     [[ -n $one && $one == "$many" ]] || { echo "$method: checksums differ: 1 rank $one, $n ranks $many"; exit 1; }
     [[ $(field "$work/$method-$n" ranks) == "$n" ]] || { echo "the report does not say $n ranks"; exit 1; }
@@ -71,6 +82,18 @@ for method in $cases; do
   if [[ $method == slope && -d $work/newton-1 ]]; then
     [[ $(sum "$work/slope-1") != $(sum "$work/newton-1") ]] ||
       { echo "slope: the same state as the halving line search: the case does not reach the slope search"; exit 1; }
+  fi
+  if [[ $method == multigrid ]]; then
+    cycles=$(report "$work/multigrid-4" 'r["multigrid"][0]["cycles"] if r["multigrid"] else 0')
+    (( cycles > 0 )) || { echo "multigrid: no V-cycle ran on 4 ranks"; exit 1; }
+    echo "multigrid: $cycles V-cycles on 4 ranks"
+    # Stopped at step 20 on 2 ranks, continued on 3: the uninterrupted run's state.
+    OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${args[@]}" --set solver.steps=20 --set output.checkpoint_every=20 \
+      --output "$work/multigrid-restart"
+    OMP_NUM_THREADS=1 "$mpiexec" -n 3 "$drape" --restart "$work/multigrid-restart/checkpoint.h5" --set solver.steps=40 --quiet
+    [[ $(sum "$work/multigrid-restart") == $(sum "$work/multigrid-1") ]] ||
+      { echo "multigrid: 2 ranks to step 20, then 3 ranks: $(sum "$work/multigrid-restart"), not $(sum "$work/multigrid-1")"; exit 1; }
+    echo "multigrid: restarted on 3 ranks from 2 ranks' step 20: the same state"
   fi
   if [[ $method == kinks ]]; then
     "$drape" "${args[@]}" --set solver.band_active_set=false --output "$work/kinks-off" >/dev/null

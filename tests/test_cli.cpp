@@ -505,9 +505,15 @@ TEST(CliBad, MoreRanksThanTiles) {
 }
 
 // The multigrid preconditioner runs on one rank.
-TEST(CliBad, MultigridOnTwoRanks) {
-  expect_refused_on_two_ranks("mg-ranks", "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"'",
-                              "solver.preconditioner = \"multigrid\" runs on one rank only");
+TEST(CliBad, MultigridWithAmrcOrSelfContactOnTwoRanks) {
+  expect_refused_on_two_ranks("mg-ranks",
+                              "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"' "
+                              "--set amrc.enabled=true",
+                              "with amrc.enabled = true runs on one rank only");
+  expect_refused_on_two_ranks("mg-contact-ranks",
+                              "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"' "
+                              "--set solver.self_contact=true",
+                              "with solver.self_contact = true runs on one rank only");
 }
 
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a

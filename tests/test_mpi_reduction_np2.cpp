@@ -44,6 +44,26 @@ TEST(MpiReducer, TileSumsMatchOneRankBitwise) {
   }
 }
 
+// Every rank's values concatenated in rank order, on every rank: a part of
+// none, of a few, and one past the 64 MiB a round moves (two rounds).
+TEST(MpiReducer, GatherConcatenatesInRankOrder) {
+  MpiReducer red(MPI_COMM_WORLD, 1);
+  EXPECT_EQ(red.ranks(), 2);
+  const int64_t big = (int64_t(1) << 23) + 3;  // doubles: 64 MiB and 24 bytes
+  for (int64_t n1 : {int64_t(0), int64_t(5), big}) {
+    const int64_t n = rank() == 0 ? 3 : n1;
+    std::vector<double> mine(static_cast<size_t>(n));
+    for (int64_t k = 0; k < n; ++k) mine[k] = 1000.0 * rank() + double(k);
+    std::vector<int64_t> counts, bytes;
+    red.counts(n, counts);
+    ASSERT_EQ(counts, (std::vector<int64_t>{3, n1}));
+    std::vector<double> all(static_cast<size_t>(3 + n1), -1.0);
+    gather_all(red, mine.data(), counts, all.data(), bytes);
+    for (int64_t k = 0; k < 3 + n1; ++k)
+      ASSERT_EQ(all[k], k < 3 ? double(k) : 1000.0 + double(k - 3)) << "value " << k << " of " << 3 + n1;
+  }
+}
+
 TEST(MpiReducer, StateChecksumIndependentOfOwnership) {
   Scene s = flat_scene(13, 11, 0.2, 0.2);
   s.cloth.tile = 4;

@@ -66,9 +66,14 @@ void Simulation::refuse_unsupported() const {
   if (sv.self_contact && numeric)
     throw InputError("solver.self_contact = true needs solver.gradient = \"analytic\" (the difference "
                      "windows do not reach a particle's contact partners)");
-  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid)
-    throw InputError("solver.preconditioner = \"multigrid\" runs on one rank only (its levels are not "
-                     "split over ranks yet); run it without mpirun or use \"jacobi\"");
+  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && scene.amrc.enabled)
+    throw InputError("solver.preconditioner = \"multigrid\" with amrc.enabled = true runs on one rank only "
+                     "(K's rows do not yet reach another rank's hanging particles); run it without mpirun "
+                     "or use \"jacobi\"");
+  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && sv.self_contact)
+    throw InputError("solver.preconditioner = \"multigrid\" with solver.self_contact = true runs on one rank "
+                     "only (K's contact blocks across ranks are not yet checked against one rank's); run it "
+                     "without mpirun or use \"jacobi\"");
 }
 
 // The cloth, new or the checkpoint's, on its first mesh.

@@ -1,6 +1,8 @@
 #include "decomp/reduction.hpp"
 
 #include <algorithm>
+#include <cstring>
+#include <vector>
 
 namespace drape {
 
@@ -44,6 +46,50 @@ void MpiReducer::max_each(double* a, int64_t n) const {
   const int64_t piece = int64_t(1) << 30;  // MPI counts are int
   for (int64_t k = 0; k < n; k += piece)
     MPI_Allreduce(MPI_IN_PLACE, a + k, int(std::min(piece, n - k)), MPI_DOUBLE, MPI_MAX, comm_);
+  seconds += MPI_Wtime() - t0;
+}
+
+int MpiReducer::ranks() const {
+  int n = 1;
+  MPI_Comm_size(comm_, &n);
+  return n;
+}
+
+void MpiReducer::counts(int64_t n, std::vector<int64_t>& out) const {
+  out.resize(size_t(ranks()));
+  MPI_Allgather(&n, 1, MPI_INT64_T, out.data(), 1, MPI_INT64_T, comm_);
+}
+
+// Round k moves bytes [k kPiece, (k + 1) kPiece) of every rank's part into
+// round_, whence each lands at its rank's offset in `all`.
+void MpiReducer::gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const {
+  const double t0 = MPI_Wtime();
+  const int n = int(bytes.size());
+  int me = 0;
+  MPI_Comm_rank(comm_, &me);
+  int64_t most = 0;
+  std::vector<int64_t>& at = at_;  // members: no allocation per V-cycle
+  std::vector<int>&cnt = cnt_, &disp = disp_;
+  at.assign(size_t(n) + 1, 0);
+  cnt.resize(size_t(n));
+  disp.resize(size_t(n));
+  for (int k = 0; k < n; ++k) {
+    most = std::max(most, bytes[k]);
+    at[k + 1] = at[k] + bytes[k];
+  }
+  for (int64_t from = 0; from < most; from += kPiece) {
+    int64_t total = 0;
+    for (int k = 0; k < n; ++k) {
+      cnt[k] = int(std::clamp<int64_t>(bytes[k] - from, 0, kPiece));
+      disp[k] = int(total);
+      total += cnt[k];
+    }
+    if (round_.size() < size_t(total)) round_.resize(size_t(total));
+    MPI_Allgatherv(static_cast<const char*>(mine) + (cnt[me] > 0 ? from : 0), cnt[me], MPI_BYTE, round_.data(),
+                   cnt.data(), disp.data(), MPI_BYTE, comm_);
+    for (int k = 0; k < n; ++k)
+      if (cnt[k] > 0) std::memcpy(static_cast<char*>(all) + at[k] + from, round_.data() + disp[k], size_t(cnt[k]));
+  }
   seconds += MPI_Wtime() - t0;
 }
 

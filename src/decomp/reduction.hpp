@@ -18,6 +18,10 @@ class MpiReducer : public Reducer {
   uint64_t sum_u64(uint64_t v) const override;
   int64_t sum_i64(int64_t v) const override;
   void max_each(double* a, int64_t n) const override;
+  int ranks() const override;
+  void counts(int64_t n, std::vector<int64_t>& out) const override;
+  // In rounds of at most kPiece bytes a rank (MPI's counts are int).
+  void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const override;
 
   mutable double seconds = 0;  // in sum_tiles, max and max_each, this rank
 
@@ -25,6 +29,10 @@ class MpiReducer : public Reducer {
   MPI_Comm comm_;
   int tiles_;
   mutable std::vector<double> global_;
+  static constexpr int64_t kPiece = int64_t(1) << 26;
+  mutable std::vector<char> round_;  // one round's pieces, rank after rank
+  mutable std::vector<int64_t> at_;
+  mutable std::vector<int> cnt_, disp_;
 };
 
 }  // namespace drape

@@ -98,9 +98,11 @@ void declare_solver(ParameterList& list) {
            "the paper's nonlinear CG on the total cost. Both stop at the same cost "
            "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("cg")
       .add("preconditioner", &SolverSpec::preconditioner, {Preconditioner::Jacobi, Preconditioner::Multigrid},
-           "newton's linear CG: jacobi | multigrid (one rank)",
+           "newton's linear CG: jacobi | multigrid",
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
-           "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; one rank only) ([design.md §7](design.md))")
+           "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; "
+           "on several ranks the levels are built from all ranks' rows and run on every rank alike, bitwise one rank's "
+           "result; not with AMRC or self-contact on several ranks) ([design.md §7](design.md))")
           .example("multigrid")
       .add("newton_target", &SolverSpec::newton_target, "", at_least(1),
            "multigrid: Newton iterations per step that dt grows under",

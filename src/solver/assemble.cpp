@@ -86,7 +86,14 @@ void Evaluator::assembly_maps() {
 template <class Add>
 void Evaluator::row_terms(int64_t r, Add&& add) const {
   const size_t np = size_t(lists_.particles.size());
+  // With global columns (several ranks): any rank's free particle has one.
+  const int32_t* global = asm_columns_;
+  auto column = [&](int32_t row) { return global ? global[lists_.particles.items[row]] : row; };
   auto columns = [&](int64_t p, double w, const double* blk) {
+    if (global && global[p] >= 0) {
+      add(global[p], w, blk);
+      return;
+    }
     const int32_t row = asm_index_[p];
     if (row >= 0) {
       add(row, w, blk);
@@ -94,8 +101,8 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
     }
     const int32_t k = asm_hang_.empty() ? -1 : asm_hang_[p];
     if (k >= 0)  // a hanging particle: its ends' rows, by its weights
-      for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(hx_[e].row, w * hx_[e].w, blk);
-    // fixed, or another rank's: no unknown of this rank behind it
+      for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(column(hx_[e].row), w * hx_[e].w, blk);
+    // fixed, or (one rank's columns) another rank's: no unknown of this rank behind it
   };
   auto one = [&](int64_t p, const GatherRow& g, const double* kc, double mass, double w) {
     double blk[9] = {mass, 0, 0, 0, mass, 0, 0, 0, mass};
@@ -160,15 +167,19 @@ void Evaluator::rank_one(const double* kg, int n, int part, const int64_t* ids, 
   }
 }
 
-void Evaluator::assemble_stiffness(BlockMatrix& K) {
+void Evaluator::assemble_stiffness(BlockMatrix& K, const std::vector<int32_t>* column_of, int64_t columns,
+                                   uint64_t column_stamp) {
   list_rows();
   if (!keep_ || !kg_ready_)
     throw std::logic_error("Evaluator::assemble_stiffness: needs stiffness_diagonal's kept numbers");
   assembly_maps();
   const int64_t rows = lists_.particles.size();
-  // The columns change with the lists and self-contact's pairs only.
-  if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds()) {
+  asm_columns_ = column_of ? column_of->data() : nullptr;
+  if (!column_of) columns = rows;
+  // The columns change with the lists, self-contact's pairs and the global numbering only.
+  if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds() || asm_column_stamp_ != column_stamp) {
     asm_pairs_ = self_.builds();
+    asm_column_stamp_ = column_stamp;
     std::vector<std::vector<int32_t>> cols;
     cols.resize(size_t(rows));
 #pragma omp parallel for schedule(static)
@@ -182,7 +193,7 @@ void Evaluator::assemble_stiffness(BlockMatrix& K) {
   }
 #pragma omp parallel
   {
-    std::vector<int64_t> slot(size_t(rows), -1);  // column -> its block in row r (no searches)
+    std::vector<int64_t> slot(size_t(columns), -1);  // column -> its block in row r (no searches)
 #pragma omp for schedule(static)
     for (int64_t r = 0; r < rows; ++r) {
       for (int64_t k = K.start[r]; k < K.start[r + 1]; ++k) slot[K.col[k]] = k;
@@ -194,6 +205,7 @@ void Evaluator::assemble_stiffness(BlockMatrix& K) {
       for (int64_t k = K.start[r]; k < K.start[r + 1]; ++k) slot[K.col[k]] = -1;
     }
   }
+  asm_columns_ = nullptr;
 }
 
 }  // namespace drape

@@ -82,6 +82,8 @@ class Minimizer {
   }
   // Its arrays' capacities.
   void memory(MemoryTable& t) const;
+  const Reducer& reducer() const { return red_; }
+  const Tiling& tiling() const { return tiling_; }
   // Gives its vectors back (a later minimize() sizes them again).
   void release();
 

@@ -181,8 +181,13 @@ class Evaluator {
   // particles folded onto their ends (P^T K P) as in stiffness_product:
   // the same operator, summed in another order. Reads the numbers
   // stiffness_diagonal kept at z (call it first). Columns of particles this
-  // rank does not own are left out (one rank sees the whole operator).
-  void assemble_stiffness(BlockMatrix& K);
+  // rank does not own are left out (one rank sees the whole operator),
+  // unless `column_of` (grid particle -> column, of every rank's free
+  // particles; `columns` of them) numbers them: K's rows as one rank
+  // assembles them, for a multigrid built from every rank's rows. The
+  // pattern is kept while the lists and `column_stamp` stay.
+  void assemble_stiffness(BlockMatrix& K, const std::vector<int32_t>* column_of = nullptr, int64_t columns = 0,
+                          uint64_t column_stamp = 0);
 
   // Newton residual (scaled) of the last evaluation, 3 per free particle in
   // the particle list's order (lists().particles.items[r] at 3 r): the
@@ -497,6 +502,8 @@ class Evaluator {
   template <class Columns>
   static void rank_one(const double* kg, int n, int part, const int64_t* ids, double w, Columns&& columns);
   std::vector<int32_t> asm_index_, asm_hang_;
+  const int32_t* asm_columns_ = nullptr;  // assemble_stiffness's global columns, while it runs
+  uint64_t asm_column_stamp_ = 0;
   std::vector<int64_t> hx_start_, ht_start_;
   std::vector<HxEntry> hx_, ht_;
   uint64_t asm_stamp_ = 0, asm_pairs_ = 0;

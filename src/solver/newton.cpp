@@ -68,15 +68,42 @@ uint64_t pattern_stamp(const Evaluator& ev) {
 // K assembled at z and the levels over it. The compact vectors number the
 // free particles as the particle list does (tile, then index): the
 // assembled rows' order, checked when the lists change.
+// On several ranks every rank assembles its rows with global columns, and
+// the levels are built from all of them, gathered in one rank's order, on
+// every rank alike (RankRows): the one-rank V-cycle, replicated.
 void NewtonSolver::setup_multigrid(Evaluator& ev) {
   const ActiveLists& lists = ev.lists();
-  const uint64_t stamp = pattern_stamp(ev);
-  if (ids_.size() != size_t(lists.particles.size()) || stamp != mg_stamp_) {
+  const Reducer& red = dots_.reducer();
+  const uint64_t stamp = red.sum_u64(pattern_stamp(ev));  // every rank's lists
+  const bool renumber = ids_.size() != size_t(lists.particles.size()) || stamp != mg_stamp_;
+  if (renumber) {
     ids_.assign(lists.particles.items.begin(), lists.particles.items.end());
     mg_stamp_ = stamp;  // in the compact order: check_numbering
   }
-  ev.assemble_stiffness(k_);
-  mg_.setup(k_, ids_, c_.grid.ni, c_.grid.nj, stamp);
+  if (red.ranks() == 1) {
+    ev.assemble_stiffness(k_);
+    mg_.setup(k_, ids_, c_.grid.ni, c_.grid.nj, stamp);
+    return;
+  }
+  // Collective from here: stale is every rank's decision alike (multigrid_stale).
+  if (renumber || ranks_.size() == 0) {
+    ranks_.number(red, dots_.tiling(), ids_, c_.grid.n());
+    std::vector<double>(size_t(3 * ranks_.size()), 0.0).swap(rg_);
+    std::vector<double>(size_t(3 * ranks_.size()), 0.0).swap(xg_);
+  }
+  ev.assemble_stiffness(k_, &ranks_.column_of(), ranks_.size(), stamp);
+  ranks_.gather_matrix(red, k_, kg_);
+  mg_.setup(kg_, ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
+}
+
+void NewtonSolver::precondition(const double* r, double* s) {
+  if (dots_.reducer().ranks() == 1) {
+    mg_.apply(r, s);
+    return;
+  }
+  ranks_.gather(dots_.reducer(), r, rg_.data());
+  mg_.apply(rg_.data(), xg_.data());
+  ranks_.take_mine(xg_.data(), s);
 }
 
 // A V-cycle built on K at an earlier Newton iteration of the same step still
@@ -86,7 +113,8 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
 // changed, and when the last solve took more than twice the iterations of
 // the first solve on this build.
 bool NewtonSolver::multigrid_stale(const Evaluator& ev) const {
-  return mg_solves_ == 0 || pattern_stamp(ev) != mg_stamp_ || mg_last_ > std::max(4, 2 * mg_first_);
+  if (mg_solves_ == 0 || mg_last_ > std::max(4, 2 * mg_first_)) return true;
+  return dots_.reducer().sum_u64(pattern_stamp(ev)) != mg_stamp_;  // every rank's lists: one decision
 }
 
 // Preconditioned CG for K d = -rho. Its vectors are compact: the free
@@ -151,7 +179,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     }
     {
       ScopedPhase ph(tm, kPrecondition);
-      mg_.apply(r, s);
+      precondition(r, s);
     }
     ScopedPhase ph(tm, kVector);
     dots_.compact_sums<1>(end, [&](int64_t c, double* acc) {
@@ -193,7 +221,7 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     if (mg) {
       {
         ScopedPhase ph(tm, kPrecondition);
-        mg_.apply(r, s);
+        precondition(r, s);
       }
       ScopedPhase ph(tm, kVector);
       dots_.compact_sums<1>(end, [&](int64_t c, double* acc) { acc[0] += r[c] * s[c]; }, sums + 1);

@@ -15,6 +15,7 @@
 #include "solver/cg.hpp"
 #include "solver/memory_table.hpp"
 #include "solver/multigrid/multigrid.hpp"
+#include "solver/multigrid/rank_rows.hpp"
 #include "solver/scene.hpp"
 
 namespace drape {
@@ -28,6 +29,9 @@ class NewtonSolver {
   CgResult minimize(Evaluator& ev, double* z, const CgSettings& s, Timers& timers,
                     const std::function<void(int, double)>& on_iteration = {});
 
+  // Several ranks' V-cycle: bytes gathered into each rank per cycle and per build (0 on one rank).
+  int64_t multigrid_cycle_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.vector_bytes() : 0; }
+  int64_t multigrid_build_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.matrix_bytes() : 0; }
   // The multigrid's levels (empty with Jacobi).
   const std::vector<MultigridLevelStats>& multigrid_stats() const { return mg_.stats(); }
   Preconditioner preconditioner() const { return pc_; }
@@ -62,6 +66,8 @@ class NewtonSolver {
   double through_kinks(Evaluator& ev, double* z, double g0, Trial&& trial, double& last_a, CgResult& res,
                        const CgSettings& st, double eta, Timers& tm);
   bool multigrid_stale(const Evaluator& ev) const;
+  // s = M^-1 r (compact vectors): on several ranks through the gathered levels.
+  void precondition(const double* r, double* s);
 
   const Cloth& c_;
   Minimizer& dots_;
@@ -81,6 +87,11 @@ class NewtonSolver {
   Multigrid mg_;
   std::vector<int64_t> ids_;  // the free particles, in the compact vectors' order
   uint64_t mg_stamp_ = 0;
+  // Several ranks: every rank's rows gathered (RankRows), K of them, and
+  // the V-cycle's global right-hand side and result.
+  RankRows ranks_;
+  BlockMatrix kg_;
+  std::vector<double> rg_, xg_;
   // Solves on the current build, and the first's and last's iterations.
   int mg_solves_ = 0, mg_first_ = 0, mg_last_ = 0;
   int64_t mg_builds_ = 0;  // hierarchies built so far

@@ -5,6 +5,7 @@
 // src/decomp/; physics only sees this interface.
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace drape {
@@ -22,7 +23,24 @@ class Reducer {
   // a[k] = the largest of the ranks' a[k], for k < n: a field that each rank
   // fills where it owns (0 elsewhere, values >= 0) becomes whole everywhere.
   virtual void max_each(double* a, int64_t n) const = 0;
+  // How many ranks hand in partials.
+  virtual int ranks() const = 0;
+  // out[k] = rank k's n, on every rank.
+  virtual void counts(int64_t n, std::vector<int64_t>& out) const = 0;
+  // Every rank's bytes[rank] bytes at `mine`, concatenated in rank order
+  // into `all` (their sum), on every rank: for what each rank holds a part
+  // of and every rank needs whole, in one order (the multigrid's levels).
+  virtual void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const = 0;
 };
+
+// gather_bytes for arrays of T: counts[k] values from rank k.
+template <class T>
+void gather_all(const Reducer& red, const T* mine, const std::vector<int64_t>& counts, T* all,
+                std::vector<int64_t>& bytes) {
+  bytes.resize(counts.size());
+  for (size_t k = 0; k < counts.size(); ++k) bytes[k] = counts[k] * int64_t(sizeof(T));
+  red.gather_bytes(mine, bytes, all);
+}
 
 // One rank: the owned tiles are all tiles.
 class LocalReducer : public Reducer {
@@ -40,6 +58,11 @@ class LocalReducer : public Reducer {
   uint64_t sum_u64(uint64_t v) const override { return v; }
   int64_t sum_i64(int64_t v) const override { return v; }
   void max_each(double*, int64_t) const override {}
+  int ranks() const override { return 1; }
+  void counts(int64_t n, std::vector<int64_t>& out) const override { out.assign(1, n); }
+  void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const override {
+    if (all != mine && bytes[0] > 0) std::memcpy(all, mine, size_t(bytes[0]));
+  }
 };
 
 }  // namespace drape

@@ -1,0 +1,85 @@
+#include "solver/multigrid/rank_rows.hpp"
+
+#include <algorithm>
+#include <utility>
+
+namespace drape {
+
+void RankRows::number(const Reducer& red, const Tiling& tiling, const std::vector<int64_t>& mine, int64_t grid) {
+  red.counts(int64_t(mine.size()), rows_);
+  int64_t n = 0;
+  for (int64_t c : rows_) n += c;
+  std::vector<int64_t> cat(static_cast<size_t>(n));
+  gather_all(red, mine.data(), rows_, cat.data(), bytes_);
+  // One rank's list order: by tile, then by index.
+  std::vector<std::pair<int64_t, int64_t>> key(static_cast<size_t>(n));
+  for (int64_t k = 0; k < n; ++k) key[k] = {int64_t(tiling.tile_of(cat[k])) * grid + cat[k], k};
+  std::sort(key.begin(), key.end());
+  ids_.resize(size_t(n));
+  from_.resize(size_t(n));
+  column_of_.assign(size_t(grid), -1);
+  for (int64_t g = 0; g < n; ++g) {
+    from_[g] = key[g].second;
+    ids_[g] = cat[key[g].second];
+    column_of_[ids_[g]] = int32_t(g);
+  }
+  mine_.resize(mine.size());
+  for (size_t r = 0; r < mine.size(); ++r) mine_[r] = column_of_[mine[r]];
+}
+
+void RankRows::gather_matrix(const Reducer& red, const BlockMatrix& mine, BlockMatrix& all) {
+  const int64_t n = size();
+  // Row lengths, then columns and values, each concatenated in rank order.
+  len_.resize(size_t(mine.rows));
+  for (int64_t r = 0; r < mine.rows; ++r) len_[r] = mine.start[r + 1] - mine.start[r];
+  std::vector<int64_t> cat_len(static_cast<size_t>(n));
+  gather_all(red, len_.data(), rows_, cat_len.data(), bytes_);
+  cat_start_.assign(size_t(n) + 1, 0);
+  for (int64_t k = 0; k < n; ++k) cat_start_[k + 1] = cat_start_[k] + cat_len[k];
+  red.counts(mine.blocks(), blocks_);
+  cat_col_.resize(size_t(cat_start_[n]));
+  gather_all(red, mine.col.data(), blocks_, cat_col_.data(), bytes_);
+  for (int64_t& b : blocks_) b *= 9;
+  cat_.resize(size_t(9 * cat_start_[n]));
+  gather_all(red, mine.val.data(), blocks_, cat_.data(), bytes_);
+  matrix_bytes_ = 8 * n + cat_start_[n] * (4 + 72);
+  // Rows in global order.
+  all.rows = n;
+  all.start.resize(size_t(n) + 1);
+  all.start[0] = 0;
+  for (int64_t g = 0; g < n; ++g) all.start[g + 1] = all.start[g] + cat_len[from_[g]];
+  all.col.resize(size_t(all.start[n]));
+  all.val.resize(size_t(9 * all.start[n]));
+#pragma omp parallel for schedule(static)
+  for (int64_t g = 0; g < n; ++g) {
+    const int64_t s = cat_start_[from_[g]], e = cat_start_[from_[g] + 1];
+    std::copy(cat_col_.begin() + s, cat_col_.begin() + e, all.col.begin() + all.start[g]);
+    std::copy(cat_.begin() + 9 * s, cat_.begin() + 9 * e, all.val.begin() + 9 * all.start[g]);
+  }
+  std::vector<double>(size_t(3 * n)).swap(cat_);  // the vectors' concatenation from here on
+  std::vector<int32_t>().swap(cat_col_);
+}
+
+void RankRows::gather(const Reducer& red, const double* mine, double* all) {
+  blocks_.resize(rows_.size());
+  for (size_t k = 0; k < rows_.size(); ++k) blocks_[k] = 3 * rows_[k];
+  gather_all(red, mine, blocks_, cat_.data(), bytes_);
+  const int64_t n = size();
+#pragma omp parallel for schedule(static)
+  for (int64_t g = 0; g < n; ++g)
+    for (int k = 0; k < 3; ++k) all[3 * g + k] = cat_[3 * from_[g] + k];
+}
+
+void RankRows::take_mine(const double* all, double* mine) const {
+  const int64_t n = int64_t(mine_.size());
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < n; ++r)
+    for (int k = 0; k < 3; ++k) mine[3 * r + k] = all[3 * mine_[r] + k];
+}
+
+size_t RankRows::memory() const {
+  return (ids_.capacity() + rows_.capacity() + from_.capacity() + mine_.capacity() + cat_start_.capacity()) * 8 +
+         column_of_.capacity() * 4 + cat_.capacity() * 8;
+}
+
+}  // namespace drape
