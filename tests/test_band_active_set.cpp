@@ -93,11 +93,7 @@ Outcome drape(bool active_set, int threads, int steps, bool fixed = false) {
 }
 
 TEST(NewtonKinks, ActiveSetSameBitsForOneAndTwoThreads) {
-  const Outcome one = drape(true, 1, 12), two = drape(true, 2, 12);
-  EXPECT_EQ(one.checksum, two.checksum);
-  EXPECT_EQ(one.newton, two.newton);
-  EXPECT_EQ(one.evaluations, two.evaluations);
-  EXPECT_EQ(one.unconverged, 0);
+  expect_one_and_two_threads_agree([](int threads) { return drape(true, threads, 12); });
 }
 
 // At the same steps, the secants' re-solves save Newton iterations (295

@@ -800,6 +800,68 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
   }
 }
 
+// What one evaluation leaves: the cost terms, the gradient and the residuals
+// in list order and at z's indices.
+struct Evaluated {
+  CostTerms cost;
+  std::vector<double> grad, rho, rho_grid;
+};
+
+// w's z with each particle raised by `move` steps of a pattern.
+std::vector<double> moved_z(const Simulation& w, int move) {
+  std::vector<double> z = w.cloth.z;
+  for (int64_t p : w.lists.particles.items) z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * move * (p % 5);
+  return z;
+}
+
+// The residuals the evaluator kept from its last evaluation, into o.
+void read_residuals(Evaluator& ev, Evaluated& o) {
+  o.rho = ev.residual();
+  o.rho_grid = ev.gradient_residual();
+}
+
+// One evaluation of w at moved_z(w, move): the way under test with `tested`,
+// the reference way without.
+using Evaluation = std::function<Evaluated(Simulation& w, bool tested, int move)>;
+
+// On a plain mesh and an AMRC one, on one thread and on three: two like
+// worlds from `seed`, the reference evaluated on the first and the tested
+// way on the second, each at z and then at z moved (what one evaluation left
+// behind must not stand in for the next's), give the same numbers bit for
+// bit, and the move changes the gradient. `then` checks the tested world
+// afterwards.
+void expect_tested_is_reference(unsigned seed, const Evaluation& run,
+                                const std::function<void(Simulation&, const std::string& mesh)>& then = {}) {
+  const int threads_before = omp_get_max_threads();
+  for (bool amrc : {false, true})
+    for (int threads : {1, 3}) {
+      omp_set_num_threads(threads);
+      const auto reference_world = random_world(seed, amrc), tested_world = random_world(seed, amrc);
+      const std::string mesh = std::string(amrc ? "AMRC mesh, " : "plain mesh, ") + std::to_string(threads) + " threads";
+      if (amrc) {
+        ASSERT_GT(tested_world->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
+      }
+      std::vector<double> first;
+      for (int move : {0, 1}) {
+        const Evaluated reference = run(*reference_world, false, move), tested = run(*tested_world, true, move);
+        const std::string where = mesh + (move ? ", z moved" : "");
+        EXPECT_EQ(reference.cost.newton, tested.cost.newton) << where;
+        EXPECT_EQ(reference.cost.stretch, tested.cost.stretch) << where;
+        EXPECT_EQ(reference.cost.bend, tested.cost.bend) << where;
+        EXPECT_EQ(reference.cost.shear, tested.cost.shear) << where;
+        EXPECT_EQ(reference.grad, tested.grad) << where << ": the gradient";
+        EXPECT_EQ(reference.rho, tested.rho) << where << ": the residuals";
+        EXPECT_EQ(reference.rho_grid, tested.rho_grid) << where << ": the residuals at z's indices";
+        if (move) {
+          EXPECT_NE(first, tested.grad) << where << ": the move changed nothing: the test does not test";
+        }
+        first = tested.grad;
+      }
+      if (then) then(*tested_world, mesh);
+    }
+  omp_set_num_threads(threads_before);
+}
+
 // evaluate(z, grad) in one parallel region gives the separate regions'
 // numbers bit for bit: the cost terms, the gradient (every entry: the fused
 // one starts from NaN, so an entry it left unwritten would show), the
@@ -807,51 +869,16 @@ TEST(Stiffness, SettledCostIsHysteresisForcesThenEvaluate) {
 // one (hanging particles: their forces and residuals run on the master
 // thread between the passes), on one thread and on three.
 TEST(Evaluator, FusedCostGradientIsTheSeparatePasses) {
-  const int threads_before = omp_get_max_threads();
-  for (bool amrc : {false, true})
-    for (int threads : {1, 3}) {
-      omp_set_num_threads(threads);
-      // Two evaluators on like worlds, each at z and then at z moved (what
-      // one evaluation left behind must not stand in for the next's).
-      const auto apart_world = random_world(17, amrc), fused_world = random_world(17, amrc);
-      struct Out {
-        CostTerms cost;
-        std::vector<double> grad, rho, rho_grid;
-      };
-      auto run = [&](Simulation& w, bool fused, int move) {
-        Evaluator& ev = w.loop->evaluator();
-        ev.fuse_gradient(fused);
-        std::vector<double> z = w.cloth.z;
-        for (int64_t p : w.lists.particles.items) z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * move * (p % 5);
-        Out o;
-        o.grad.assign(z.size(), fused ? std::nan("") : 0.0);
-        o.cost = ev.evaluate(z.data(), o.grad.data());
-        o.rho = ev.residual();
-        o.rho_grid = ev.gradient_residual();
-        return o;
-      };
-      const std::string mesh = std::string(amrc ? "AMRC mesh, " : "plain mesh, ") + std::to_string(threads) + " threads";
-      if (amrc) {
-        ASSERT_GT(fused_world->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
-      }
-      std::vector<double> first;
-      for (int move : {0, 1}) {
-        const Out apart = run(*apart_world, false, move), fused = run(*fused_world, true, move);
-        const std::string where = mesh + (move ? ", z moved" : "");
-        EXPECT_EQ(apart.cost.newton, fused.cost.newton) << where;
-        EXPECT_EQ(apart.cost.stretch, fused.cost.stretch) << where;
-        EXPECT_EQ(apart.cost.bend, fused.cost.bend) << where;
-        EXPECT_EQ(apart.cost.shear, fused.cost.shear) << where;
-        EXPECT_EQ(apart.grad, fused.grad) << where << ": the gradient";
-        EXPECT_EQ(apart.rho, fused.rho) << where << ": the residuals";
-        EXPECT_EQ(apart.rho_grid, fused.rho_grid) << where << ": the residuals at z's indices";
-        if (move) {
-          EXPECT_NE(first, fused.grad) << where << ": the move changed nothing: the test does not test";
-        }
-        first = fused.grad;
-      }
-    }
-  omp_set_num_threads(threads_before);
+  expect_tested_is_reference(17, [](Simulation& w, bool fused, int move) {
+    Evaluator& ev = w.loop->evaluator();
+    ev.fuse_gradient(fused);
+    std::vector<double> z = moved_z(w, move);
+    Evaluated o;
+    o.grad.assign(z.size(), fused ? std::nan("") : 0.0);
+    o.cost = ev.evaluate(z.data(), o.grad.data());
+    read_residuals(ev, o);
+    return o;
+  });
 }
 
 // cost_for_gradient(z) then gradient_at_last_cost(grad) gives what
@@ -861,62 +888,27 @@ TEST(Evaluator, FusedCostGradientIsTheSeparatePasses) {
 // moved, the pair's evaluator costing a trial at another z before each (the
 // line search's rejected trials: their numbers must not stand in).
 TEST(Evaluator, CostThenGradientIsEvaluate) {
-  const int threads_before = omp_get_max_threads();
-  for (bool amrc : {false, true})
-    for (int threads : {1, 3}) {
-      omp_set_num_threads(threads);
-      const auto whole_world = random_world(19, amrc), split_world = random_world(19, amrc);
-      struct Out {
-        CostTerms cost;
-        std::vector<double> grad, rho, rho_grid;
-      };
-      auto moved = [](Simulation& w, int move) {
-        std::vector<double> z = w.cloth.z;
-        for (int64_t p : w.lists.particles.items) z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * move * (p % 5);
-        return z;
-      };
-      auto run = [&](Simulation& w, bool split, int move) {
-        Evaluator& ev = w.loop->evaluator();
-        std::vector<double> z = moved(w, move);
-        Out o;
-        o.grad.assign(z.size(), std::nan(""));
-        if (split) {
-          std::vector<double> rejected = moved(w, move + 3);
-          ev.cost_for_gradient(rejected.data());
-          o.cost = ev.cost_for_gradient(z.data());
-          ev.gradient_at_last_cost(o.grad.data());
-        } else {
-          o.cost = ev.evaluate(z.data(), o.grad.data());
-        }
-        o.rho = ev.residual();
-        o.rho_grid = ev.gradient_residual();
-        return o;
-      };
-      const std::string mesh = std::string(amrc ? "AMRC mesh, " : "plain mesh, ") + std::to_string(threads) + " threads";
-      if (amrc) {
-        ASSERT_GT(split_world->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
-      }
-      std::vector<double> first;
-      for (int move : {0, 1}) {
-        const Out whole = run(*whole_world, false, move), split = run(*split_world, true, move);
-        const std::string where = mesh + (move ? ", z moved" : "");
-        EXPECT_EQ(whole.cost.newton, split.cost.newton) << where;
-        EXPECT_EQ(whole.cost.stretch, split.cost.stretch) << where;
-        EXPECT_EQ(whole.cost.bend, split.cost.bend) << where;
-        EXPECT_EQ(whole.cost.shear, split.cost.shear) << where;
-        EXPECT_EQ(whole.grad, split.grad) << where << ": the gradient";
-        EXPECT_EQ(whole.rho, split.rho) << where << ": the residuals";
-        EXPECT_EQ(whole.rho_grid, split.rho_grid) << where << ": the residuals at z's indices";
-        if (move) {
-          EXPECT_NE(first, split.grad) << where << ": the move changed nothing: the test does not test";
-        }
-        first = split.grad;
-      }
-      // The gradient is taken once per cost: a second one has nothing to read.
-      std::vector<double> g(split_world->cloth.z.size());
-      EXPECT_THROW(split_world->loop->evaluator().gradient_at_last_cost(g.data()), std::logic_error) << mesh;
+  const Evaluation run = [](Simulation& w, bool split, int move) {
+    Evaluator& ev = w.loop->evaluator();
+    std::vector<double> z = moved_z(w, move);
+    Evaluated o;
+    o.grad.assign(z.size(), std::nan(""));
+    if (split) {
+      std::vector<double> rejected = moved_z(w, move + 3);
+      ev.cost_for_gradient(rejected.data());
+      o.cost = ev.cost_for_gradient(z.data());
+      ev.gradient_at_last_cost(o.grad.data());
+    } else {
+      o.cost = ev.evaluate(z.data(), o.grad.data());
     }
-  omp_set_num_threads(threads_before);
+    read_residuals(ev, o);
+    return o;
+  };
+  // The gradient is taken once per cost: a second one has nothing to read.
+  expect_tested_is_reference(19, run, [](Simulation& split, const std::string& mesh) {
+    std::vector<double> g(split.cloth.z.size());
+    EXPECT_THROW(split.loop->evaluator().gradient_at_last_cost(g.data()), std::logic_error) << mesh;
+  });
 }
 
 // The element buffers are kept in list order (the ring's after this rank's),

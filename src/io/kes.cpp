@@ -456,22 +456,24 @@ void linear_summary(const Branches& b, double* slope, double* half) {
   if (!(*slope > 0)) fail(b.file, 0, "", "the curve's mean slope is not positive");
 }
 
-BendingKES bending_from_curve(const fs::path& path) {
-  Branches b = read_curve_csv(path, kBendingCurve);
-  BendingKES k;
-  linear_summary(b, &k.b, &k.hb);
+// A bending or shear KES from its curve: the linear summary gives the
+// rigidity (`slope`) and the band's half width (`half`); the branches stay.
+template <class KES>
+KES kes_from_curve(const fs::path& path, const CurveSpec& spec, double KES::*slope, double KES::*half) {
+  Branches b = read_curve_csv(path, spec);
+  KES k;
+  linear_summary(b, &(k.*slope), &(k.*half));
   k.load = std::move(b.load);
   k.unload = std::move(b.unload);
   return k;
 }
 
+BendingKES bending_from_curve(const fs::path& path) {
+  return kes_from_curve(path, kBendingCurve, &BendingKES::b, &BendingKES::hb);
+}
+
 ShearKES shear_from_curve(const fs::path& path) {
-  Branches b = read_curve_csv(path, kShearCurve);
-  ShearKES k;
-  linear_summary(b, &k.g, &k.hg);
-  k.load = std::move(b.load);
-  k.unload = std::move(b.unload);
-  return k;
+  return kes_from_curve(path, kShearCurve, &ShearKES::g, &ShearKES::hg);
 }
 
 // `curve = "f.csv"` (both directions) or `curve = { warp = "a.csv", weft = "b.csv" }`.

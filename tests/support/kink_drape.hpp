@@ -2,8 +2,10 @@
 // A small drape onto a box (contact, the bands loading and reversing),
 // Newton with the multigrid: the scene the Newton-step variants (line
 // searches, the kinks' active set) are compared on, and a run of it counted.
+#include <gtest/gtest.h>
 #include <omp.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,16 @@ inline KinkDrapeOutcome run_kink_drape(const Scene& s, int threads, int steps) {
   for (int t = 0; t < w.tiling.count(); ++t) all.push_back(t);
   out.checksum = state_checksum(w.cloth, w.tiling, all, w.red()).hex();
   return out;
+}
+
+// `run(threads)` on one thread and on two: the same state bit for bit, the
+// same counts, and no step left unconverged.
+inline void expect_one_and_two_threads_agree(const std::function<KinkDrapeOutcome(int threads)>& run) {
+  const KinkDrapeOutcome one = run(1), two = run(2);
+  EXPECT_EQ(one.checksum, two.checksum);
+  EXPECT_EQ(one.newton, two.newton);
+  EXPECT_EQ(one.evaluations, two.evaluations);
+  EXPECT_EQ(one.unconverged, 0);
 }
 
 }  // namespace drape::test
