@@ -34,7 +34,9 @@ inline void fold(Simulation& w, double gap_in_h) {
   for (int64_t k = 0; k < 3 * g.n(); ++k) w.cloth.x1[k] = w.cloth.x2[k] = w.cloth.z[k];
 }
 
-inline Scene strip_scene(bool self_contact) {
+// With amrc, leaves up to 4 spacings wide (the flap and the lower half
+// start on them, 4 times the pair distance between particles).
+inline Scene strip_scene(bool self_contact, bool amrc = false) {
   Scene s = flat_scene(kNi, kNj, (kNi - 1) * kH, (kNj - 1) * kH);
   s.obstacle.floor = true;
   s.solver.self_contact = self_contact;
@@ -43,7 +45,22 @@ inline Scene strip_scene(bool self_contact) {
   s.solver.tolerance = 1e-8;
   s.solver.max_iterations = 400;
   s.solver.drag = 5;  // settles in a few tenths of a second
+  s.amrc.enabled = amrc;
+  s.amrc.max_level = 2;
+  s.amrc.start_spacing = 4 * kH;
   return s;
+}
+
+// The drape program's loop until `end` (s): steps, and AMRC's adaptations
+// every amrc.every steps where it is on. Returns whether every step converged.
+inline bool run_until(Simulation& w, double end) {
+  bool converged = true;
+  while (w.cloth.time < end) {
+    const StepStats st = w.step();
+    converged &= st.converged;
+    if (w.scene.amrc.enabled && st.step % w.scene.amrc.every == 0) w.adapt();
+  }
+  return converged;
 }
 
 }  // namespace drape::test
