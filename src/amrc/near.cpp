@@ -110,25 +110,24 @@ void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& s
     const int levels = std::min(top_level, coarsest_leaf(tree_, ip, jp) + 1);
     if (levels == 0) return 0.0;
     const double* xp = xs + 3 * kp;
-    int64_t home[3], at[3];
+    int64_t home[3];
     hash.cell_of(xp, home);
     const int64_t span = int64_t(std::ceil(reach.keep(levels) / hash.cell));
-    const double far2 = reach.keep(levels) * reach.keep(levels);
+    const double far2 = reach.keep(levels) * reach.keep(levels), same2 = reach.keep(1) * reach.keep(1);
     unsigned mask = 0;
     for (int64_t a = -span; a <= span; ++a)
       for (int64_t b = -span; b <= span; ++b)
         for (int64_t e = -span; e <= span; ++e) {
           const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
           const int64_t bk = hash.bucket(cx, cy, cz);
+          // A particle of another cell in this bucket needs no skipping: the
+          // mask is an OR, and one outside the searched cells lies beyond far.
           for (int32_t s = start[bk]; s < start[bk + 1]; ++s) {
-            const int64_t kq = bucket_items_[s];
-            if (kq == kp) continue;
-            const double* xq = xs + 3 * kq;
-            hash.cell_of(xq, at);
-            if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
-            const int64_t q = packed_ids_[kq];
+            const int64_t q = packed_ids_[bucket_items_[s]];
             const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
             const double rest2 = di * di + dj * dj;
+            if (rest2 <= same2) continue;  // the same sheet at every level's reach (p itself too)
+            const double* xq = xs + 3 * int64_t(bucket_items_[s]);
             double d2 = 0;
             for (int k = 0; k < 3; ++k) d2 += (xq[k] - xp[k]) * (xq[k] - xp[k]);
             if (d2 >= far2) continue;
