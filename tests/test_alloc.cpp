@@ -27,9 +27,10 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 namespace drape::test {
 namespace {
 
-void expect_no_allocation(bool slope_line_search, bool band_active_set = false) {
+void expect_no_allocation(bool slope_line_search, bool band_active_set = false, bool self_contact = false) {
   Scene s;  // the box scene, small
   s.cloth.particles = {33, 33};
+  s.solver.self_contact = self_contact;
   s.solver.slope_line_search = slope_line_search;
   s.solver.band_active_set = band_active_set;
   s.cloth.tile = 8;
@@ -50,7 +51,9 @@ void expect_no_allocation(bool slope_line_search, bool band_active_set = false) 
   auto run = [&](int steps) {
     for (int k = 0; k < steps; ++k) {
       iterations += w.step().iterations;
-      const AdaptStats a = amrc.adapt(w.cloth, w.fabric.density, s.cloth.shear, Thresholds{0.1, 0.02});
+      Thresholds th{0.1, 0.02};
+      th.pair_distance = self_contact ? 2 * w.model.contact.thickness : 0.0;  // the near mask too
+      const AdaptStats a = amrc.adapt(w.cloth, w.fabric.density, s.cloth.shear, th);
       if (a.refined + a.coarsened > 0) {
         rebuild();
         ++changes;
@@ -72,6 +75,10 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrc) { expect_no_allocation(false); }
 TEST(Allocation, NoneWithNewtonsSlopeLineSearch) { expect_no_allocation(true); }
 
 TEST(Allocation, NoneWithNewtonsBandActiveSet) { expect_no_allocation(false, true); }
+
+// AMRC with self-contact: the near mask's positions and hash, and the pair
+// list built again at each new mesh.
+TEST(Allocation, NoneDuringTimeStepsWithAmrcAndSelfContact) { expect_no_allocation(false, false, true); }
 
 // Self-contact on one rank: the folded strip's flap dropped onto its lower
 // half from 2.4 pair distances, pair lists built again between Newton steps

@@ -437,6 +437,57 @@ TEST(AmrcMesh, DeflectionStopsAUniformBendOneLevelCoarser) {
   }
 }
 
+// A 33 x 9 cloth folded across i onto itself (flat for i <= 14, a half
+// turn of radius 1.5 h, back above the lower half 3 pair distances up) on
+// level-2 leaves, adapted a few times: with self-contact's pair distance
+// the criterion splits the flat leaves far from the fold, where each sheet
+// faces the other, down to the finest level (amrc/near.cpp); without it
+// they are flat and stay as coarse as they can.
+TEST(AmrcMesh, SheetsFacingEachOtherSplitToTheFinestLevel) {
+  constexpr int ni = 33, nj = 9;
+  constexpr double h = 0.01, r = 1.5 * h, s0 = 14 * h;
+  auto fold = [&](Simulation& w) {
+    for (int i = 0; i < ni; ++i)
+      for (int j = 0; j < nj; ++j) {
+        const double s = i * h;
+        double x, z;
+        if (s <= s0) {
+          x = s, z = 0;
+        } else if (s <= s0 + M_PI * r) {
+          x = s0 + r * std::sin((s - s0) / r), z = r * (1 - std::cos((s - s0) / r));
+        } else {
+          x = s0 - (s - s0 - M_PI * r), z = 2 * r;
+        }
+        const double y[3] = {x, j * h, z};
+        for (int k = 0; k < 3; ++k) {
+          const int64_t u = 3 * (int64_t(i) * nj + j) + k;
+          w.cloth.z[u] = w.cloth.x1[u] = w.cloth.x2[u] = y[k];
+        }
+      }
+  };
+  for (bool near : {true, false}) {
+    Simulation w(flat_scene(ni, nj, (ni - 1) * h, (nj - 1) * h), test_fabric());
+    Amrc amrc(w.cloth, 2);
+    amrc.restore(std::vector<uint8_t>(size_t(ni - 1) * (nj - 1), 2));
+    amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
+    const double pair = 2 * w.model.contact.thickness;
+    ASSERT_NEAR(pair, h, 1e-12);
+    Thresholds th{0.1, 0.02};
+    th.pair_distance = near ? pair : 0.0;
+    int refined_near = 0;
+    for (int pass = 0; pass < 4; ++pass) {
+      fold(w);
+      refined_near += amrc.adapt(w.cloth, w.fabric.density, w.scene.cloth.shear, th).refined_near;
+    }
+    const Quadtree& t = amrc.tree();
+    ASSERT_TRUE(t.balanced());
+    EXPECT_EQ(refined_near > 0, near);
+    for (int ci : {0, 1, 2, 3, 28, 29, 30, 31})
+      for (int cj = 0; cj < nj - 1; ++cj)
+        EXPECT_EQ(t.leaf_at(ci, cj).level, near ? 0 : 2) << ci << "," << cj << (near ? " near" : "");
+  }
+}
+
 // A cloth draped over a box's edge (grid line i = 3) on level-1 leaves: the
 // leaf [2, 4] spans the edge, so its middle particles lie on a chord cutting
 // through the box. Refining the leaf next to one of them makes it hang on the

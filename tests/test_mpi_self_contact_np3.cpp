@@ -39,6 +39,7 @@ struct Outcome {
   int64_t contact_ghosts = 0;  // over the ranks, at the last build
   int64_t in_contact = 0;      // pairs closer than the pair distance at the end, over the ranks
   uint64_t builds = 0;
+  int64_t refined_near = 0;  // AMRC's splits for the other sheet nearby
 };
 
 // Pairs of p's listed partners in contact at the end, over this rank's particles.
@@ -56,41 +57,48 @@ int64_t pairs_in_contact(const Simulation& w) {
 // The flap dropped from just above the lower half (1.02 pair distances), so
 // that pairs come into contact within a few steps, for `end` seconds, on the
 // first `ranks` ranks with `threads` threads; every rank gets rank 0's result.
+// With amrc, the wide sheet folded at 16 spacings and dropped from 1.5 pair
+// distances, AMRC adapting as the program does.
 Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = SolverMethod::Newton,
-             double end = 0.06) {
+             double end = 0.06, bool amrc = false) {
   MPI_Comm comm;
   MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
   Outcome out;
   char sum[40] = {0};
-  int64_t counts[3] = {0, 0, 0};
+  int64_t counts[4] = {0, 0, 0, 0};
   if (comm != MPI_COMM_NULL) {
     omp_set_num_threads(threads);
     RunOptions opt;
     opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_" + std::to_string(ranks) +
                      (self_contact ? "_on" : "_off") +
-                     (method == SolverMethod::Cg ? "_cg" : "");
+                     (method == SolverMethod::Cg ? "_cg" : "") + (amrc ? "_amrc" : "");
     opt.quiet = true;
-    Scene scene = strip_scene(self_contact);
+    Scene scene = amrc ? wide_strip_scene(self_contact) : strip_scene(self_contact);
     scene.solver.method = method;
     Simulation w(scene, test_fabric(), opt, comm);
-    fold(w, 1.02);
+    if (amrc)
+      fold(w, 1.5, 16);
+    else
+      fold(w, 1.02);
     w.start();
-    while (w.cloth.time < end) w.step();
+    run_until(w, end);
     const std::string hex = state_checksum(w.cloth, w.tiling, w.owned(), w.red()).hex();
     hex.copy(sum, sizeof sum - 1);
     const SelfContact& sc = w.loop->evaluator().self_contact();
     counts[0] = w.red().sum_i64(sc.contact_ghosts());
     counts[1] = w.red().sum_i64(pairs_in_contact(w));
     counts[2] = int64_t(sc.builds());
+    counts[3] = w.summary().refined_near;
     omp_set_num_threads(1);
     MPI_Comm_free(&comm);
   }
   quiet_bcast(sum, sizeof sum, MPI_CHAR);
-  quiet_bcast(counts, 3, MPI_INT64_T);
+  quiet_bcast(counts, 4, MPI_INT64_T);
   out.checksum = sum;
   out.contact_ghosts = counts[0];
   out.in_contact = counts[1];
   out.builds = uint64_t(counts[2]);
+  out.refined_near = counts[3];
   return out;
 }
 
@@ -113,6 +121,32 @@ TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanks) {
   EXPECT_EQ(three.builds, one.builds);
   // The pairs change the state: the comparison above could fail.
   const Outcome off = drop(2, 1, false);
+  EXPECT_NE(off.checksum, one.checksum);
+}
+
+// AMRC on: the sheet starts on leaves 4 spacings wide, the near mask splits
+// those where the flap faces the lower half (positions gathered over ranks),
+// the pair list follows each new mesh; 1 rank with 2 threads, 2 and 3 ranks
+// end in the same state.
+TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanksWithAmrc) {
+  const double end = 0.025;  // the flap lands at 0.02 s (and the tight fold springs it open after 0.03 s)
+  const Outcome one = drop(1, 2, true, SolverMethod::Newton, end, true);
+  const Outcome two = drop(2, 1, true, SolverMethod::Newton, end, true);
+  const Outcome three = drop(3, 1, true, SolverMethod::Newton, end, true);
+  ASSERT_FALSE(one.checksum.empty());
+  if (getenv("DRAPE_DEBUG_SELF") && rank() == 0)
+    printf("wide strip with AMRC: %s, %lld near splits, %lld in contact, %lld/%lld contact ghosts\n",
+           one.checksum.c_str(), (long long)one.refined_near, (long long)one.in_contact,
+           (long long)two.contact_ghosts, (long long)three.contact_ghosts);
+  EXPECT_GT(one.refined_near, 0) << "no leaf split for the other sheet";
+  EXPECT_GT(one.in_contact, 20) << "pairs should be in contact";
+  EXPECT_GT(three.contact_ghosts, 0) << "no partner on another rank: the test does not cover contact ghosts";
+  EXPECT_EQ(two.checksum, one.checksum);
+  EXPECT_EQ(three.checksum, one.checksum);
+  EXPECT_EQ(two.refined_near, one.refined_near);
+  EXPECT_EQ(three.refined_near, one.refined_near);
+  EXPECT_EQ(three.builds, one.builds);
+  const Outcome off = drop(2, 1, false, SolverMethod::Newton, end, true);
   EXPECT_NE(off.checksum, one.checksum);
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "amrc/per_particle.hpp"
 #include "amrc/remesh.hpp"
 
 namespace drape {
@@ -49,7 +50,10 @@ void place(const Corners& k, const double* x, double* y) {
 void Amrc::memory(MemoryTable& t) const {
   auto cap = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   t.add("Amrc", "trees' levels", cap(tree_.levels()) + cap(old_.levels()));
-  t.add("Amrc", "criterion fields (indicator, speed, inside)", cap(indicator_) + cap(speed_) + cap(inside_));
+  t.add("Amrc", "criterion fields (indicator, speed, inside, near)",
+        cap(indicator_) + cap(speed_) + cap(inside_) + cap(near_));
+  t.add("Amrc", "near sheets' packed particles and hash",
+        cap(packed_ids_) + cap(packed_at_) + cap(bucket_start_) + cap(bucket_items_) + cap(packed_x_));
   t.add("Amrc", "leaves (adapt's scratch)", cells_);
   t.add("Amrc", "the old mesh's marks",
         cap(was_active_) + cap(was_free_) + cap(edge_on_) + cap(triple_on_) + cap(shear_on_));
@@ -60,6 +64,14 @@ Amrc::Amrc(const Cloth& c, int max_level)
   indicator_.assign(c.grid.n(), 0.0);
   speed_.assign(c.grid.n(), 0.0);
   inside_.assign(c.grid.n(), 0.0);
+  near_.assign(c.grid.n(), 0.0);
+  packed_ids_.assign(c.grid.n(), 0);
+  packed_at_.assign(c.grid.n(), -1);
+  packed_x_.assign(3 * c.grid.n(), 0.0);
+  int64_t buckets = 1;
+  while (buckets < 2 * c.grid.n()) buckets *= 2;
+  bucket_start_.assign(buckets + 1, 0);
+  bucket_items_.assign(c.grid.n(), 0);
   cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
   was_active_.assign(c.grid.n(), 0);
   was_free_.assign(c.grid.n(), 0);
@@ -68,31 +80,6 @@ Amrc::Amrc(const Cloth& c, int max_level)
   shear_on_ = c.shear_on;
 }
 
-namespace {
-
-// Runs at(p) on every particle of the rank's tiles (all of them on one
-// rank), then takes each particle's value from its owner.
-template <class At>
-void per_particle(const Cloth& c, const AdaptShare& share, std::vector<double>& out, At&& at) {
-  const int64_t n = c.grid.n();
-  out.assign(n, 0.0);
-  if (!share.tiling) {
-#pragma omp parallel for schedule(static)
-    for (int64_t p = 0; p < n; ++p) out[p] = at(p);
-    return;
-  }
-  const Tiling& tl = *share.tiling;
-  const std::vector<int>& tiles = *share.tiles;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (size_t k = 0; k < tiles.size(); ++k) {
-    const TileRange r = tl.range(tiles[k]);
-    for (int i = r.i0; i < r.i1; ++i)
-      for (int j = r.j0; j < r.j1; ++j) out[int64_t(i) * tl.nj + j] = at(int64_t(i) * tl.nj + j);
-  }
-  share.reducer->max_each(out.data(), n);
-}
-
-}  // namespace
 
 void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
   const double* x = c.x();
@@ -174,8 +161,10 @@ AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, const Thresholds& t
   const bool solid = obstacle && obstacle->shape != ObstacleShape::None;
   if (solid) inside(c, *obstacle, share, inside_);
   old_ = tree_;
+  const bool near = th.pair_distance > 0;
+  if (near) near_sheets(c, th.pair_distance, share, near_);
   const AdaptStats st = drape::adapt(tree_, indicator_, th, cells_, th.coarsen_speed > 0 ? &speed_ : nullptr,
-                                     solid ? &inside_ : nullptr);
+                                     solid ? &inside_ : nullptr, near ? &near_ : nullptr);
   if (st.refined == 0 && st.coarsened == 0) return st;
   carry_over(c, density, shear);
   return st;

@@ -41,6 +41,13 @@ class Amrc {
   // mask criterion.hpp's adapt takes): bit 0, on the leaf it lies in now;
   // bit l, on the level-l cell round it, merged.
   void inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<double>& out) const;
+  // Per active particle, the near mask criterion.hpp's adapt takes, for
+  // self-contact at pair distance D: bit l, a particle of the cloth that is
+  // not its mesh neighbour lies within split_reach(l), bit kKeepFine + l,
+  // within keep_reach(l) (levels up to one above its coarsest leaf's).
+  // Only pairs of particles are checked, so a leaf must split while another
+  // sheet could still reach its surface unseen (near.cpp).
+  void near_sheets(const Cloth& c, double pair_distance, const AdaptShare& share, std::vector<double>& out);
   // Each active particle's speed (m/s) as the next step starts; 0 elsewhere.
   void speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
 
@@ -79,7 +86,11 @@ class Amrc {
   void carry_shear(Cloth& c) const;
 
   Quadtree tree_, old_;
-  std::vector<double> indicator_, speed_, inside_;
+  std::vector<double> indicator_, speed_, inside_, near_;
+  // near_sheets's: the active particles (ids, positions) packed in id order,
+  // each particle's packed index (-1: inactive), and their spatial hash.
+  std::vector<int32_t> packed_ids_, packed_at_, bucket_start_, bucket_items_;
+  std::vector<double> packed_x_;
   std::vector<Cell> cells_;  // adapt's scratch, reserved for every leaf
   std::vector<uint8_t> was_active_, was_free_, edge_on_, triple_on_, shear_on_;  // the old mesh's
 };

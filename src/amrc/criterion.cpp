@@ -28,7 +28,7 @@ bool any_inside(const Quadtree& t, const Cell& c, const std::vector<double>* ins
 
 AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thresholds& th,
                  std::vector<Cell>& snapshot, const std::vector<double>* speed,
-                 const std::vector<double>* inside) {
+                 const std::vector<double>* inside, const std::vector<double>* near) {
   if (!(th.coarsen < th.refine)) throw std::invalid_argument("amrc: the coarsen threshold must be below refine");
   // The indicator of leaves at `level` in the thresholds' units.
   auto scale = [&](int level) { return th.by_width ? std::ldexp(1.0, level - tree.max_level()) : 1.0; };
@@ -38,10 +38,12 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
     const Cell now = tree.leaf_at(c.i, c.j);
     if (!(now == c) || !tree.can_refine(c)) continue;
     const bool bent = largest(tree, c, indicator) * scale(c.level) > th.refine;
-    if (bent || any_inside(tree, c, inside, 1u)) {
+    const bool in = !bent && any_inside(tree, c, inside, 1u);
+    if (bent || in || any_inside(tree, c, near, 1u << c.level)) {
       tree.refine(c);
       ++st.refined;
-      st.refined_inside += bent ? 0 : 1;
+      st.refined_inside += in ? 1 : 0;
+      st.refined_near += bent || in ? 0 : 1;
     }
   }
   // Merges are judged on the tree as this sweep found it, then made: made one
@@ -59,7 +61,7 @@ AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thr
     if (parent.i != c.i || parent.j != c.j) continue;  // visit each parent once, from its first child
     // The children's particles, measured at the children's spacing.
     if (tree.can_coarsen(parent) && largest(tree, parent, indicator) * scale(c.level) < th.coarsen &&
-        (!speed || largest(tree, parent, *speed) < th.coarsen_speed) && !any_inside(tree, parent, inside, 1u | 1u << l))
+        (!speed || largest(tree, parent, *speed) < th.coarsen_speed) && !any_inside(tree, parent, inside, 1u | 1u << l) && !any_inside(tree, parent, near, 1u << (kKeepFine + l)))
       snapshot[merges++] = parent;
   }
   for (size_t k = 0; k < merges; ++k) st.coarsened += tree.coarsen(snapshot[k]) ? 1 : 0;

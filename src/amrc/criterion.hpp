@@ -11,7 +11,12 @@ namespace drape {
 struct AdaptStats {
   int refined = 0, coarsened = 0;
   int refined_inside = 0;  // of `refined`, the splits the inside mask alone asked for
+  int refined_near = 0;    // of `refined`, the splits the near mask alone asked for
 };
+
+// The near mask's bits that keep a cell from forming start here (those that
+// split a leaf: from bit 1, one a level; max_level is at most 10).
+constexpr unsigned kKeepFine = 16;
 
 // AmrcSpec's values as the criterion reads them (no defaults of its own: a
 // forgotten refine/coarsen fails adapt()'s coarsen < refine check).
@@ -21,6 +26,9 @@ struct Thresholds {
   // Scale each leaf's indicator by its width over the coarsest leaf's
   // (AmrcIndicator::Deflection): finer leaves need sharper turns to split.
   bool by_width = false;
+  // > 0: self-contact's pair distance D; leaves near another part of the
+  // cloth split until self-contact sees it (Amrc::near_sheets).
+  double pair_distance = 0;
 };
 
 // One pass: every leaf whose largest indicator (over the particles of its
@@ -35,9 +43,14 @@ struct Thresholds {
 // splits (and no cell holding it merges); bit l set, merging the level-l
 // cell round it would, and the cell stays split. A leaf spanning a box's edge cuts through the box with its
 // flat surface; split later, its particles would start deep inside.
+// With `near` (one mask per particle, held in a double; Amrc::near_sheets):
+// bit l set, another part of the cloth lies close enough for a level-l leaf
+// holding the particle to let it pass through unseen by self-contact, and
+// that leaf splits; bit kKeepFine + l set, a level-l cell holding it would
+// come too close, and it stays split.
 AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, const Thresholds& th,
                  std::vector<Cell>& scratch, const std::vector<double>* speed = nullptr,
-                 const std::vector<double>* inside = nullptr);
+                 const std::vector<double>* inside = nullptr, const std::vector<double>* near = nullptr);
 inline AdaptStats adapt(Quadtree& tree, const std::vector<double>& indicator, double refine, double coarsen) {
   std::vector<Cell> scratch;
   return adapt(tree, indicator, Thresholds{refine, coarsen}, scratch);

@@ -124,6 +124,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("refined", (long long)s.refined)
       .value("coarsened", (long long)s.coarsened)
       .value("refined_inside", (long long)s.refined_inside)
+      .value("refined_near", (long long)s.refined_near)
       .value("start_spacing", scene.amrc.start_spacing)
       .end_object();
   // Grid sequencing: each uniform mesh, from the step it took over at.

@@ -44,6 +44,7 @@ struct Summary {
   int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
   int64_t refined = 0, coarsened = 0;                         // AMRC operations
   int64_t refined_inside = 0;  // of `refined`, leaves split for cutting into the obstacle
+  int64_t refined_near = 0;    // of `refined`, leaves split for another part of the cloth nearby (self-contact)
   std::vector<Rebalance> rebalances;                          // after AMRC, several ranks
   // Grid sequencing: where each uniform mesh took over, and what its steps
   // cost in this process (what limits its dt: Newton iterations, retries,

@@ -60,9 +60,6 @@ void Simulation::refuse_unsupported() const {
   if (ranks_ > 1 && numeric)
     throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
                      "reach beyond the ghost particles); run it without mpirun");
-  if (sv.self_contact && scene.amrc.enabled)
-    throw InputError("solver.self_contact = true needs amrc.enabled = false (a coarse leaf's particles lie "
-                     "further apart than the pair distance: the cloth would pass between them)");
   if (sv.self_contact && numeric)
     throw InputError("solver.self_contact = true needs solver.gradient = \"analytic\" (the difference "
                      "windows do not reach a particle's contact partners)");

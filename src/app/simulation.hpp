@@ -88,6 +88,7 @@ class Simulation {
   const Quadtree* tree() const { return amrc ? &amrc->tree() : nullptr; }
   const Reducer& red() const;
   const std::vector<int>& owned() const { return dec_.owned; }
+  const Summary& summary() const { return sum_; }  // the counts report.json gives, so far
 
   Scene scene;
   Fabric fabric;

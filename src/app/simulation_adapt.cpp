@@ -32,14 +32,17 @@ void Simulation::adapt() {
   {
     ScopedPhase ph(tm_, kAmrc);
     loop->refresh_ghosts(true);  // new particles take values from old corners, ghosts among them
+    // With self-contact, leaves near another part of the cloth split (amrc/near.cpp).
     const Thresholds th{scene.amrc.refine, scene.amrc.coarsen, scene.amrc.coarsen_speed,
-                        scene.amrc.indicator == AmrcIndicator::Deflection};
+                        scene.amrc.indicator == AmrcIndicator::Deflection,
+                        model.self_contact ? 2 * model.contact.thickness : 0.0};
     a = amrc->adapt(cloth, fabric.density, scene.cloth.shear, th, {&tiling, &dec_.owned, &red()},
                     &model.contact.obstacle);
   }
   sum_.refined += a.refined;
   sum_.coarsened += a.coarsened;
   sum_.refined_inside += a.refined_inside;
+  sum_.refined_near += a.refined_near;
   if (a.refined != 0 || a.coarsened != 0) mesh_changed(false);
 }
 

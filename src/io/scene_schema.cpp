@@ -132,10 +132,11 @@ void declare_solver(ParameterList& list) {
            "m; 0 = automatic", "the contact layer; 0: half the grid spacing (a coarse mesh of grid sequencing: half its cell diagonal), or half the fabric's thickness if larger")
           .example("0.001")
       .add("self_contact", &SolverSpec::self_contact, "", any(),
-           "cloth-cloth contact (no AMRC)",
+           "cloth-cloth contact",
            "cloth-cloth contact: two particles that are not mesh neighbours keep twice the contact layer "
-           "apart ([design.md §1](design.md#1-the-cloth-model)) on any number of ranks; `amrc.enabled = false`, "
-           "`solver.gradient = \"analytic\"`").example("true")
+           "apart ([design.md §1](design.md#1-the-cloth-model)) on any number of ranks; with AMRC, leaves "
+           "near another part of the cloth split to the finest level "
+           "([design.md §2](design.md#2-amrc-and-grid-sequencing)); `solver.gradient = \"analytic\"`").example("true")
       .add("memory", &SolverSpec::memory, "", non_negative(), "weight of the force memory (hysteresis) term",
            "weight of the memory term that pulls each force to its hysteresis target").example("0.5")
       .add("drag", &SolverSpec::drag, "1/s", non_negative(), "1/s: air drag, a force -drag*m*v on each particle",

@@ -21,7 +21,8 @@ class Reducer {
   virtual uint64_t sum_u64(uint64_t v) const = 0;  // wrapping sum (checksums)
   virtual int64_t sum_i64(int64_t v) const = 0;
   // a[k] = the largest of the ranks' a[k], for k < n: a field that each rank
-  // fills where it owns (0 elsewhere, values >= 0) becomes whole everywhere.
+  // fills where it owns (0 elsewhere, values >= 0; or -HUGE_VAL elsewhere,
+  // any values) becomes whole everywhere.
   virtual void max_each(double* a, int64_t n) const = 0;
   // How many ranks hand in partials.
   virtual int ranks() const = 0;

@@ -11,11 +11,12 @@ constexpr int kNi = 7, kNj = 23;
 constexpr double kH = 0.01;  // spacing: the contact layer is h/2, the pair distance h
 
 // Particle (i, j) of a strip folded across j: the grid line along j runs
-// flat on the floor's layer for s < s0, turns up a half circle of radius r,
-// and runs back above the lower half at height 2r, a gap of gap_in_h spacings.
-inline void fold(Simulation& w, double gap_in_h) {
+// flat on the floor's layer for s < s0 (flat_in_h spacings), turns up a half
+// circle of radius r, and runs back above the lower half at height 2r, a gap
+// of gap_in_h spacings.
+inline void fold(Simulation& w, double gap_in_h, double flat_in_h = 10) {
   const Grid& g = w.cloth.grid;
-  const double layer = w.model.contact.thickness, r = 0.5 * gap_in_h * g.hj, s0 = 10 * g.hj;
+  const double layer = w.model.contact.thickness, r = 0.5 * gap_in_h * g.hj, s0 = flat_in_h * g.hj;
   for (int i = 0; i < g.ni; ++i)
     for (int j = 0; j < g.nj; ++j) {
       const double s = j * g.hj;
@@ -34,7 +35,9 @@ inline void fold(Simulation& w, double gap_in_h) {
   for (int64_t k = 0; k < 3 * g.n(); ++k) w.cloth.x1[k] = w.cloth.x2[k] = w.cloth.z[k];
 }
 
-inline Scene strip_scene(bool self_contact) {
+// With amrc, leaves up to 4 spacings wide (the flap and the lower half
+// start on them, 4 times the pair distance between particles).
+inline Scene strip_scene(bool self_contact, bool amrc = false) {
   Scene s = flat_scene(kNi, kNj, (kNi - 1) * kH, (kNj - 1) * kH);
   s.obstacle.floor = true;
   s.solver.self_contact = self_contact;
@@ -43,7 +46,32 @@ inline Scene strip_scene(bool self_contact) {
   s.solver.tolerance = 1e-8;
   s.solver.max_iterations = 400;
   s.solver.drag = 5;  // settles in a few tenths of a second
+  s.amrc.enabled = amrc;
+  s.amrc.max_level = 2;
+  s.amrc.start_spacing = 4 * kH;
   return s;
+}
+
+// A 33 x 33 sheet for AMRC (to fold at 16 spacings): it starts on leaves 4
+// spacings wide, which the first adaptations split where the flap faces the
+// lower half.
+inline Scene wide_strip_scene(bool self_contact) {
+  Scene s = strip_scene(self_contact, true);
+  s.cloth.particles = {33, 33};
+  s.cloth.size = {32 * kH, 32 * kH};
+  return s;
+}
+
+// The drape program's loop until `end` (s): steps, and AMRC's adaptations
+// every amrc.every steps where it is on. Returns whether every step converged.
+inline bool run_until(Simulation& w, double end) {
+  bool converged = true;
+  while (w.cloth.time < end) {
+    const StepStats st = w.step();
+    converged &= st.converged;
+    if (w.scene.amrc.enabled && st.step % w.scene.amrc.every == 0) w.adapt();
+  }
+  return converged;
 }
 
 }  // namespace drape::test
