@@ -6,6 +6,7 @@
 #include <initializer_list>
 #include <stdexcept>
 
+#include "solver/elements/band_K.hpp"
 #include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/shear_cell.hpp"
@@ -20,6 +21,24 @@ inline void put(double* out, const V& v, double s) {
   out[1] = s * v.y;
   out[2] = s * v.z;
 }
+
+#if DRAPE_LANES
+// Four elements' band and memory costs and their slopes (at cost, gq, gf:
+// four consecutive list positions; gq null where no gradient is held), lane
+// by lane the scalar passes' arithmetic: lam the cost's scale, gq divided
+// by *div where theirs is (edges, triples).
+void band_costs4(const BandFour& b, const StopFour& st, D4 f, D4 lam, bool use, double memory, const D4* div,
+                 double* cost, double* gq, double* gf) {
+  const D4 zero = splat4(0.0), mu = splat4(memory);
+  const ExcessFour ex = use ? band_excess4(f, b) : ExcessFour{zero, zero};
+  const D4 sigma = ex.r * lam, mem = (f - st.f) * lam;
+  storeu4(cost, splat4(0.5) * (sigma * sigma + mu * mem * mem));
+  if (!gq) return;
+  const D4 slope = (sigma * ex.dr_dq - mu * mem * st.df_dq) * lam;
+  storeu4(gq, div ? slope / *div : slope);
+  storeu4(gf, (sigma + mu * mem) * lam);
+}
+#endif
 }  // namespace
 
 Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists,
@@ -440,7 +459,11 @@ void Evaluator::edge_forces(const ItemRun& run, const double* z, double* settle)
         V g[4][2];
         double L[4];
         edge_length_four(e, g, L);
+#if DRAPE_LANES
+        edge_bands(run, k, L, g, z, settle);
+#else
         for (int l = 0; l < 4; ++l) edge_band(run.items[k + l], run.base + k + l, L[l], g[l], z, settle);
+#endif
       },
       [&](int64_t k) { edge_forces(run.items[k], run.base + k, z, settle); });
 }
@@ -466,6 +489,69 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
     gf_e_[pos] = (sigma + m_.memory * mem) * lam;
   }
 }
+
+#if DRAPE_LANES
+void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], const V g[4][2], const double* z,
+                           double* settle) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  const D4 L0{c_.edge_rest[s[0]], c_.edge_rest[s[1]], c_.edge_rest[s[2]], c_.edge_rest[s[3]]};
+  const D4 w{c_.edge_width[s[0]], c_.edge_width[s[1]], c_.edge_width[s[2]], c_.edge_width[s[3]]};
+  const D4 q = loadu4(L) / L0 - splat4(1.0);
+  BandValue bv[4];
+  double rev[4], f[4];
+  for (int l = 0; l < 4; ++l) {
+    const Band& b = m_.stretch[s[l] & 1];
+    bv[l] = b.at(q[l]);  // once: the power law is costly
+    rev[l] = b.reversal();
+  }
+  const BandFour b4 = band_four(bv);
+  const StopFour st = band_stop4(loadu4(&anc_e_[pos]), loadu4(rev), b4);
+  for (int l = 0; l < 4; ++l) {
+    const Band::Stop stl{st.f[l], st.df_dq[l]};
+    active_.note(0, pos + l, q[l], bv[l], stl);
+    const int64_t t = c_.layout.tension() + s[l];
+    f[l] = settle ? (settle[t] = stl.f) : z[t];
+    if (settle && keep_)
+      edge_kept(z + 3 * (s[l] >> 1), z + 3 * int64_t(nb_e_[pos + l]), L[l], std::max(0.0, stl.f), stl.df_dq / L0[l],
+                w[l], &kg_e_[kKgEdge * (pos + l)]);
+    put(&buf_e_[kEdgeSlot * (pos + l)], g[l][0], f[l] * w[l]);
+    put(&buf_e_[kEdgeSlot * (pos + l) + 3], g[l][1], f[l] * w[l]);
+  }
+  const bool slopes = !gq_e_.empty();  // a gradient's slopes (evaluate with one)
+  band_costs4(b4, st, loadu4(f), w / splat4(m_.force_scale), m_.use_stretch, m_.memory, &L0, &cost_e_[pos],
+              slopes ? &gq_e_[pos] : nullptr, slopes ? &gf_e_[pos] : nullptr);
+}
+
+void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], const V g[4][3], const double* z,
+                             double* settle) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  const D4 Lm{c_.triple_rest[s[0]], c_.triple_rest[s[1]], c_.triple_rest[s[2]], c_.triple_rest[s[3]]};
+  const D4 w{c_.triple_width[s[0]], c_.triple_width[s[1]], c_.triple_width[s[2]], c_.triple_width[s[3]]};
+  const D4 q = loadu4(th) / Lm;
+  BandValue bv[4];
+  double rev[4], f[4];
+  for (int l = 0; l < 4; ++l) {
+    const Band& b = m_.bend[s[l] & 1];
+    bv[l] = b.at(q[l]);
+    rev[l] = b.reversal();
+  }
+  const BandFour b4 = band_four(bv);
+  const StopFour st = band_stop4(loadu4(&anc_t_[pos]), loadu4(rev), b4);
+  for (int l = 0; l < 4; ++l) {
+    const Band::Stop stl{st.f[l], st.df_dq[l]};
+    active_.note(1, pos + l, q[l], bv[l], stl);
+    const int64_t m = c_.layout.moment() + s[l];
+    f[l] = settle ? (settle[m] = stl.f) : z[m];
+    if (settle && keep_) kept_gradients(w[l] * stl.df_dq / Lm[l], g[l], 3, &kg_t_[kKgTriple * (pos + l)]);
+    for (int i = 0; i < 3; ++i) put(&buf_t_[kTripleSlot * (pos + l) + 3 * i], g[l][i], f[l] * w[l]);
+  }
+  const bool slopes = !gq_t_.empty();
+  band_costs4(b4, st, loadu4(f), w / (Lm * splat4(m_.force_scale)), m_.use_bend, m_.memory, &Lm, &cost_t_[pos],
+              slopes ? &gq_t_[pos] : nullptr, slopes ? &gf_t_[pos] : nullptr);
+}
+#endif
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
   int64_t ids[3];
@@ -498,7 +584,11 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
         double sn[4], co[4], th[4];
         bend_terms_four(t, g, sn, co);
         turn_atan2_four(sn, co, th);
+#if DRAPE_LANES
+        triple_bands(run, k, th, g, z, settle);
+#else
         for (int l = 0; l < 4; ++l) triple_band(run.items[k + l], run.base + k + l, th[l], g[l], z, settle);
+#endif
       },
       [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
 }
@@ -544,6 +634,52 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
     gf_s_[pos] = (sigma + m_.memory * mem) * lam;
   }
 }
+
+void Evaluator::shear_forces(const ItemRun& run, const double* z, double* settle) {
+#if DRAPE_LANES
+  in_fours(
+      run,
+      [&](int64_t k) {
+        double phi[4];
+        V g[4][4];
+        for (int l = 0; l < 4; ++l) {
+          int64_t ids[4];
+          cell_ids(run.items[k + l], run.base + k + l, ids);
+          phi[l] = shear_cell(cell_at(ids, z).x, g[l]);
+        }
+        shear_bands(run, k, phi, g, z, settle);
+      },
+      [&](int64_t k) { shear_forces(run.items[k], run.base + k, z, settle); });
+#else
+  for (int64_t k = run.begin; k < run.end; ++k) shear_forces(run.items[k], run.base + k, z, settle);
+#endif
+}
+
+#if DRAPE_LANES
+void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V g[4][4], const double* z,
+                            double* settle) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  const D4 A{c_.shear_area[s[0]], c_.shear_area[s[1]], c_.shear_area[s[2]], c_.shear_area[s[3]]};
+  const D4 rest{c_.shear_rest[s[0]], c_.shear_rest[s[1]], c_.shear_rest[s[2]], c_.shear_rest[s[3]]};
+  BandValue bv[4];
+  for (int l = 0; l < 4; ++l) bv[l] = m_.shear.at(phi[l]);
+  const BandFour b4 = band_four(bv);
+  const StopFour st = band_stop4(loadu4(&anc_s_[pos]), splat4(m_.shear.reversal()), b4);
+  double f[4];
+  for (int l = 0; l < 4; ++l) {
+    const Band::Stop stl{st.f[l], st.df_dq[l]};
+    active_.note(2, pos + l, phi[l], bv[l], stl);
+    const int64_t t = c_.layout.shear() + s[l];
+    f[l] = settle ? (settle[t] = stl.f) : z[t];
+    if (settle && keep_) kept_gradients(A[l] * stl.df_dq, g[l], 4, &kg_s_[kKgCell * (pos + l)]);
+    for (int i = 0; i < 4; ++i) put(&buf_s_[kShearSlot * (pos + l) + 3 * i], g[l][i], f[l] * A[l]);
+  }
+  const bool slopes = !gq_s_.empty();
+  band_costs4(b4, st, loadu4(f), A / (rest * splat4(m_.force_scale)), m_.use_shear, m_.memory, nullptr,
+              &cost_s_[pos], slopes ? &gq_s_[pos] : nullptr, slopes ? &gf_s_[pos] : nullptr);
+}
+#endif
 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
@@ -740,7 +876,7 @@ void Evaluator::rebalance(ListCuts* const* cuts, int n) const {
 CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
   elements_then_particles([&](const ItemRun& run) { edge_forces(run, z, settle); },
                           [&](const ItemRun& run) { triple_forces(run, z, settle); },
-                          [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
+                          [&](const ItemRun& run) { shear_forces(run, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) {
                             double* rho = &rho_[3 * pos];
                             cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
@@ -837,7 +973,7 @@ void Evaluator::gradient_at_last_cost(double* grad) {
 CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
   auto cost_e = [&](const ItemRun& run) { edge_forces(run, z, nullptr); };
   auto cost_t = [&](const ItemRun& run) { triple_forces(run, z, nullptr); };
-  auto cost_s = [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, nullptr); };
+  auto cost_s = [&](const ItemRun& run) { shear_forces(run, z, nullptr); };
   auto residual = [&](int64_t p, int64_t pos) {
     double* rho = &rho_[3 * pos];
     cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);

@@ -226,6 +226,11 @@ class Evaluator {
   void edge_forces(const ItemRun& run, const double* z, double* settle);
   // The edge's band, force and cost from its length L and its gradient g.
   void edge_band(int64_t s, int64_t pos, double L, const V3<double> g[2], const double* z, double* settle);
+  // The same for the four edges at run positions k..k+3 (lengths L,
+  // gradients g), the band's arithmetic in lanes (band_K.hpp; with
+  // DRAPE_LANES): edge_band's numbers bit for bit.
+  void edge_bands(const ItemRun& run, int64_t k, const double L[4], const V3<double> g[4][2], const double* z,
+                  double* settle);
   // The four edges at run positions k..k+3: their ends' positions, their ends.
   void edge_four(const ItemRun& run, int64_t k, const double* z, EdgeFour& e, int64_t ends[4][2]) const;
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
@@ -233,9 +238,18 @@ class Evaluator {
   void triple_forces(const ItemRun& run, const double* z, double* settle);
   // The triple's band, force and cost from its angle th and its gradient g.
   void triple_band(int64_t s, int64_t pos, double th, const V3<double> g[3], const double* z, double* settle);
+  // The four triples at run positions k..k+3 (angles th, gradients g),
+  // likewise: triple_band's numbers bit for bit.
+  void triple_bands(const ItemRun& run, int64_t k, const double th[4], const V3<double> g[4][3], const double* z,
+                    double* settle);
   // The four triples at run positions k..k+3: their positions and axes, their particles.
   void triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const;
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  // A run of the cells' list: with DRAPE_LANES four cells' bands at a time
+  // (shear_bands), shear_forces' numbers bit for bit; else cell by cell.
+  void shear_forces(const ItemRun& run, const double* z, double* settle);
+  void shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V3<double> g[4][4], const double* z,
+                   double* settle);
   CostTerms cost_pass(double* z, double* settle, bool grid);
   void size_slopes();
   // Sizes the arrays kept in list order (and the rows) for the lists now:
