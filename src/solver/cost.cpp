@@ -640,13 +640,14 @@ void Evaluator::shear_forces(const ItemRun& run, const double* z, double* settle
   in_fours(
       run,
       [&](int64_t k) {
-        double phi[4];
+        double phi[4], sn[4][4], co[4][4];
         V g[4][4];
         for (int l = 0; l < 4; ++l) {
           int64_t ids[4];
           cell_ids(run.items[k + l], run.base + k + l, ids);
-          phi[l] = shear_cell(cell_at(ids, z).x, g[l]);
+          shear_cell_terms(cell_at(ids, z).x, g[l], sn[l], co[l]);
         }
+        shear_angles_four(sn, co, phi);
         shear_bands(run, k, phi, g, z, settle);
       },
       [&](int64_t k) { shear_forces(run.items[k], run.base + k, z, settle); });
@@ -683,7 +684,8 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
-double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho) {
+double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho,
+                                    const InertiaTerms& it) {
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
     return 0;
@@ -691,8 +693,8 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
   const double* x = z + 3 * p;
   const double* x1 = &c_.x1[3 * p];
   const double* x2 = &c_.x2[3 * p];
-  const double ca = m_.accel_coeff(), ratio = m_.dt / m_.dt_prev, mass = c_.mass[p];
-  const double cd = m_.drag / m_.dt;
+  const double ca = it.accel, ratio = it.ratio, mass = c_.mass[p];
+  const double cd = it.drag;
   double fc[3];
   contact_force(m_.contact, x, fc);
   friction_force(m_.contact, x, x1, fc);
@@ -708,7 +710,7 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
   });
   if (!lists_.hanging.empty())  // forces passed on by hanging particles (zero elsewhere)
     for (int k = 0; k < 3; ++k) r[k] += hres_[3 * p + k];
-  const double inv = 1.0 / m_.force_scale;
+  const double inv = it.inv_scale;
   for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
   return 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
 }
@@ -822,7 +824,8 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
 
 // ---- pass 4: gather per free particle ------------------------------------
 
-void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad) {
+void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad,
+                                  const InertiaTerms& it) {
   const double* rho = &rho_grid_[3 * p];
   double g[3] = {0, 0, 0};
   if (m_.use_newton) {
@@ -830,7 +833,7 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
     if (m_.self_contact) self_.add_jtr(p, z, rho_grid_.data(), jtr);
-    const double mca = c_.mass[p] * m_.inertia_coeff();
+    const double mca = c_.mass[p] * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
   gather_listed(row, [&](const double* v) {
@@ -874,12 +877,13 @@ void Evaluator::rebalance(ListCuts* const* cuts, int n) const {
 // residual (with `grid`, at z's indices too, for a gradient). settle: see
 // settled_cost.
 CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
+  const InertiaTerms it = inertia_terms();
   elements_then_particles([&](const ItemRun& run) { edge_forces(run, z, settle); },
                           [&](const ItemRun& run) { triple_forces(run, z, settle); },
                           [&](const ItemRun& run) { shear_forces(run, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) {
                             double* rho = &rho_[3 * pos];
-                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it);
                             if (grid) std::copy(rho, rho + 3, &rho_grid_[3 * p]);
                           });
   clear_hanging(hres_);
@@ -951,6 +955,7 @@ CostTerms Evaluator::cost_for_gradient(double* z) {
 }
 
 void Evaluator::gradient_at_last_cost(double* grad) {
+  const InertiaTerms it = inertia_terms();
   if (!cost_z_) throw std::logic_error("gradient_at_last_cost: no cost_for_gradient before it");
   const double* z = cost_z_;
   cost_z_ = nullptr;
@@ -963,7 +968,7 @@ void Evaluator::gradient_at_last_cost(double* grad) {
   elements_then_particles([&](const ItemRun& run) { edge_gradient(run, z, grad); },
                           [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
-                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
+                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad, it); });
   hanging_gradient(z, grad);
 }
 
@@ -971,18 +976,19 @@ void Evaluator::gradient_at_last_cost(double* grad) {
 // each element's and particle's arithmetic is the same, and every sum in
 // the same order), with barriers where a pass reads the one before.
 CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
+  const InertiaTerms it = inertia_terms();
   auto cost_e = [&](const ItemRun& run) { edge_forces(run, z, nullptr); };
   auto cost_t = [&](const ItemRun& run) { triple_forces(run, z, nullptr); };
   auto cost_s = [&](const ItemRun& run) { shear_forces(run, z, nullptr); };
   auto residual = [&](int64_t p, int64_t pos) {
     double* rho = &rho_[3 * pos];
-    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it);
     std::copy(rho, rho + 3, &rho_grid_[3 * p]);
   };
   auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
   auto grad_t = [&](const ItemRun& run) { triple_gradient(run, z, grad); };
   auto grad_s = [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); };
-  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); };
+  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad, it); };
   ListCuts* cost_cuts[7] = {};
   ListCuts* grad_cuts[7] = {};
   element_cuts<decltype(cost_e), decltype(cost_t), decltype(cost_s)>(cost_cuts);
@@ -1194,7 +1200,7 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
       double rho[3];  // scratch: the window's own
-      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho);
+      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho, inertia_terms());
       for (int d = 0; d < 2; ++d) {
         if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
         if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];

@@ -264,8 +264,16 @@ class Evaluator {
   void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
   void triple_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
+  // The Newton residual's coefficients of the step (each a division),
+  // computed once a pass rather than once a particle.
+  struct InertiaTerms {
+    double accel, ratio, drag, inv_scale, inertia;
+  };
+  InertiaTerms inertia_terms() const {
+    return {m_.accel_coeff(), m_.dt / m_.dt_prev, m_.drag / m_.dt, 1.0 / m_.force_scale, m_.inertia_coeff()};
+  }
   // Particle p's scaled residual into rho (3); returns its Newton cost.
-  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho);
+  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho, const InertiaTerms& it);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void edge_gradient(const ItemRun& run, const double* z, double* grad);
   void edge_gradient_out(int64_t s, int64_t pos, const V3<double>& ra, const V3<double>& rb, const V3<double> g[2],
@@ -277,7 +285,7 @@ class Evaluator {
   void triple_gradient_out(int64_t s, int64_t pos, const V3<double> r[3], const V3<double> g[3],
                            const V3<double> hr[3], const double* z, double* grad);
   void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
-  void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad);
+  void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad, const InertiaTerms& it);
   // Element passes: this rank's elements, then the ghost ring's (split in
   // chunks as active lists whatever the schedule: the ring has no tiles).
   template <class F>
