@@ -245,8 +245,9 @@ class Evaluator {
   // The four triples at run positions k..k+3: their positions and axes, their particles.
   void triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const;
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
-  // A run of the cells' list: with DRAPE_LANES four cells' bands at a time
-  // (shear_bands), shear_forces' numbers bit for bit; else cell by cell.
+  // A run of the cells' list: with DRAPE_LANES four cells' angles and bands
+  // at a time (shear_angles_four, shear_bands), shear_forces' numbers bit
+  // for bit; else cell by cell.
   void shear_forces(const ItemRun& run, const double* z, double* settle);
   void shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V3<double> g[4][4], const double* z,
                    double* settle);
