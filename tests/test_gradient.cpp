@@ -510,6 +510,58 @@ TEST(EdgeLanes, FourEdgesAreTheScalarKernelsBitForBit) {
   }
 }
 
+#if DRAPE_LANES
+// Band::stop and Band::excess in lanes (band_K.hpp) against the scalar ones,
+// bit for bit: a linear band and a tensile one (power law, compression
+// branch, past EMT), reversal 0 and 3, forces inside, outside, exactly on an
+// edge (the stop's own case), a zero-width band and NaN; each lane from its
+// own band, as a run's warp and weft elements alternate.
+TEST(BandLanes, StopAndExcessAreTheScalarBandsBitForBit) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  Band bands[6] = {Band::linear(2e-5, 7e-4), Band::linear(3e-5, 0), Band::tensile(TensileKES{}, 0.5),
+                   Band::linear(2e-5, 7e-4), Band::linear(3e-5, 0), Band::tensile(TensileKES{}, 0.5)};
+  for (int k = 3; k < 6; ++k) bands[k].set_reversal(3.0);
+  int on_edge = 0, outside = 0, inside = 0;
+  for (int sample = 0; sample < 20000; ++sample) {
+    BandValue v[4];
+    double q[4], anchor[4], f[4], rev[4];
+    const Band* b[4];
+    for (int l = 0; l < 4; ++l) {
+      b[l] = &bands[(sample + 5 * l) % 6];
+      const bool tensile = (sample + 5 * l) % 3 == 2;
+      q[l] = tensile ? 0.08 * u(rng) : 40 * u(rng);  // past EMT and into compression; curvatures
+      v[l] = b[l]->at(q[l]);
+      rev[l] = b[l]->reversal();
+      const double width = v[l].hi - v[l].lo, scale = std::fabs(v[l].hi) + width + 1e-3;
+      const int kind = (sample + l) % 5;
+      // anchor: the stop's force f1 + rev hi lands at hi or lo exactly (0, 1),
+      // or anywhere; f: on an edge (2), or anywhere.
+      anchor[l] = kind == 0 ? v[l].hi - rev[l] * v[l].hi : kind == 1 ? v[l].lo - rev[l] * v[l].hi : 2 * scale * u(rng);
+      f[l] = kind == 2 ? v[l].lo : kind == 3 && sample % 7 == 0 ? std::nan("") : v[l].lo + width * 1.5 * u(rng);
+    }
+    const BandFour v4 = band_four(v);
+    const StopFour st = band_stop4(D4{anchor[0], anchor[1], anchor[2], anchor[3]}, D4{rev[0], rev[1], rev[2], rev[3]}, v4);
+    const ExcessFour ex = band_excess4(D4{f[0], f[1], f[2], f[3]}, v4);
+    for (int l = 0; l < 4; ++l) {
+      const Band::Stop s1 = b[l]->stop(anchor[l], v[l]);
+      const BandExcess e1 = Band::excess(f[l], v[l]);
+      ASSERT_TRUE(same(st.f[l], s1.f) && same(st.df_dq[l], s1.df_dq)) << "sample " << sample << " lane " << l;
+      ASSERT_TRUE(same(ex.r[l], e1.r) && same(ex.dr_dq[l], e1.dr_dq)) << "sample " << sample << " lane " << l;
+      const double f1 = anchor[l] + rev[l] * v[l].hi;
+      on_edge += rev[l] > 0 && (f1 == v[l].hi || f1 == v[l].lo) && v[l].lo < v[l].hi;
+      outside += e1.r != 0;
+      inside += e1.r == 0 && f[l] == f[l];
+    }
+  }
+  // Every case was met, many times.
+  EXPECT_GT(on_edge, 1000);
+  EXPECT_GT(outside, 10000);
+  EXPECT_GT(inside, 10000);
+}
+#endif
+
 // A run-taking loop body (ItemRun) sees every item once, in fours and then
 // one by one, whatever the run's length and start.
 TEST(TripleLanes, InFoursVisitsEachItemOnce) {

@@ -171,6 +171,43 @@ TEST(ShearLanes, CellAndHessianVectorAreTheScalarKernelsBitForBit) {
   }
 }
 
+#if DRAPE_LANES
+// Four cells' gradients and angles from shear_cell_terms and
+// shear_angles_four (the cost pass's cells four at a time) are shear_cell's,
+// bit for bit: groups whose cells all take the one-atan2 form (in lanes)
+// and groups where a strongly sheared cell takes the pairwise form.
+TEST(ShearLanes, FourCellsAnglesAreShearCellsBitForBit) {
+  std::mt19937_64 rng(6);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double at[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  int lanes = 0, pairwise = 0;
+  for (int sample = 0; sample < 4000; ++sample) {
+    V3<double> x[4][4], g[4][4];
+    double sn[4][4], co[4][4], phi[4];
+    for (int l = 0; l < 4; ++l) {
+      const double amount = (sample + l) % 3 == 0 ? 0.05 : (sample + l) % 3 == 1 ? 0.4 : sample % 5 == 0 ? 1.6 : 0.9;
+      const double h = (sample + l) % 2 ? 1e-3 : 3e-2;
+      for (int k = 0; k < 4; ++k)
+        x[l][k] = {h * (at[k][0] + amount * u(rng)), h * (at[k][1] + amount * u(rng)), h * amount * u(rng)};
+      shear_cell_terms(x[l], g[l], sn[l], co[l]);
+    }
+    shear_angles_four(sn, co, phi);
+    bool one = true;
+    for (int l = 0; l < 4; ++l) {
+      V3<double> g1[4];
+      const double phi1 = shear_cell(x[l], g1);
+      ASSERT_EQ(std::memcmp(&phi[l], &phi1, sizeof phi1), 0) << "sample " << sample << " cell " << l;
+      ASSERT_EQ(std::memcmp(g[l], g1, sizeof g1), 0) << "sample " << sample << " cell " << l;
+      const double pr = sn[l][0] * sn[l][1] + co[l][0] * co[l][1], qr = sn[l][3] * sn[l][2] + co[l][3] * co[l][2];
+      one = one && pr > 0 && qr > 0;
+    }
+    (one ? lanes : pairwise) += 1;
+  }
+  EXPECT_GT(lanes, 1000);
+  EXPECT_GT(pairwise, 50);
+}
+#endif
+
 TEST(ShearCell, AmrcCarriesTheForceAcrossSplitAndMerge) {
   Scene s = flat_scene(9, 9, 0.08, 0.08);
   Simulation w(s, test_fabric());

@@ -6,6 +6,7 @@
 #include <initializer_list>
 #include <stdexcept>
 
+#include "solver/elements/band_K.hpp"
 #include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/shear_cell.hpp"
@@ -20,6 +21,24 @@ inline void put(double* out, const V& v, double s) {
   out[1] = s * v.y;
   out[2] = s * v.z;
 }
+
+#if DRAPE_LANES
+// Four elements' band and memory costs and their slopes (at cost, gq, gf:
+// four consecutive list positions; gq null where no gradient is held), lane
+// by lane the scalar passes' arithmetic: lam the cost's scale, gq divided
+// by *div where theirs is (edges, triples).
+void band_costs4(const BandFour& b, const StopFour& st, D4 f, D4 lam, bool use, double memory, const D4* div,
+                 double* cost, double* gq, double* gf) {
+  const D4 zero = splat4(0.0), mu = splat4(memory);
+  const ExcessFour ex = use ? band_excess4(f, b) : ExcessFour{zero, zero};
+  const D4 sigma = ex.r * lam, mem = (f - st.f) * lam;
+  storeu4(cost, splat4(0.5) * (sigma * sigma + mu * mem * mem));
+  if (!gq) return;
+  const D4 slope = (sigma * ex.dr_dq - mu * mem * st.df_dq) * lam;
+  storeu4(gq, div ? slope / *div : slope);
+  storeu4(gf, (sigma + mu * mem) * lam);
+}
+#endif
 }  // namespace
 
 Evaluator::Evaluator(const Cloth& cloth, const Model& model, const ActiveLists& lists,
@@ -440,7 +459,11 @@ void Evaluator::edge_forces(const ItemRun& run, const double* z, double* settle)
         V g[4][2];
         double L[4];
         edge_length_four(e, g, L);
+#if DRAPE_LANES
+        edge_bands(run, k, L, g, z, settle);
+#else
         for (int l = 0; l < 4; ++l) edge_band(run.items[k + l], run.base + k + l, L[l], g[l], z, settle);
+#endif
       },
       [&](int64_t k) { edge_forces(run.items[k], run.base + k, z, settle); });
 }
@@ -466,6 +489,69 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
     gf_e_[pos] = (sigma + m_.memory * mem) * lam;
   }
 }
+
+#if DRAPE_LANES
+void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], const V g[4][2], const double* z,
+                           double* settle) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  const D4 L0{c_.edge_rest[s[0]], c_.edge_rest[s[1]], c_.edge_rest[s[2]], c_.edge_rest[s[3]]};
+  const D4 w{c_.edge_width[s[0]], c_.edge_width[s[1]], c_.edge_width[s[2]], c_.edge_width[s[3]]};
+  const D4 q = loadu4(L) / L0 - splat4(1.0);
+  BandValue bv[4];
+  double rev[4], f[4];
+  for (int l = 0; l < 4; ++l) {
+    const Band& b = m_.stretch[s[l] & 1];
+    bv[l] = b.at(q[l]);  // once: the power law is costly
+    rev[l] = b.reversal();
+  }
+  const BandFour b4 = band_four(bv);
+  const StopFour st = band_stop4(loadu4(&anc_e_[pos]), loadu4(rev), b4);
+  for (int l = 0; l < 4; ++l) {
+    const Band::Stop stl{st.f[l], st.df_dq[l]};
+    active_.note(0, pos + l, q[l], bv[l], stl);
+    const int64_t t = c_.layout.tension() + s[l];
+    f[l] = settle ? (settle[t] = stl.f) : z[t];
+    if (settle && keep_)
+      edge_kept(z + 3 * (s[l] >> 1), z + 3 * int64_t(nb_e_[pos + l]), L[l], std::max(0.0, stl.f), stl.df_dq / L0[l],
+                w[l], &kg_e_[kKgEdge * (pos + l)]);
+    put(&buf_e_[kEdgeSlot * (pos + l)], g[l][0], f[l] * w[l]);
+    put(&buf_e_[kEdgeSlot * (pos + l) + 3], g[l][1], f[l] * w[l]);
+  }
+  const bool slopes = !gq_e_.empty();  // a gradient's slopes (evaluate with one)
+  band_costs4(b4, st, loadu4(f), w / splat4(m_.force_scale), m_.use_stretch, m_.memory, &L0, &cost_e_[pos],
+              slopes ? &gq_e_[pos] : nullptr, slopes ? &gf_e_[pos] : nullptr);
+}
+
+void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], const V g[4][3], const double* z,
+                             double* settle) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  const D4 Lm{c_.triple_rest[s[0]], c_.triple_rest[s[1]], c_.triple_rest[s[2]], c_.triple_rest[s[3]]};
+  const D4 w{c_.triple_width[s[0]], c_.triple_width[s[1]], c_.triple_width[s[2]], c_.triple_width[s[3]]};
+  const D4 q = loadu4(th) / Lm;
+  BandValue bv[4];
+  double rev[4], f[4];
+  for (int l = 0; l < 4; ++l) {
+    const Band& b = m_.bend[s[l] & 1];
+    bv[l] = b.at(q[l]);
+    rev[l] = b.reversal();
+  }
+  const BandFour b4 = band_four(bv);
+  const StopFour st = band_stop4(loadu4(&anc_t_[pos]), loadu4(rev), b4);
+  for (int l = 0; l < 4; ++l) {
+    const Band::Stop stl{st.f[l], st.df_dq[l]};
+    active_.note(1, pos + l, q[l], bv[l], stl);
+    const int64_t m = c_.layout.moment() + s[l];
+    f[l] = settle ? (settle[m] = stl.f) : z[m];
+    if (settle && keep_) kept_gradients(w[l] * stl.df_dq / Lm[l], g[l], 3, &kg_t_[kKgTriple * (pos + l)]);
+    for (int i = 0; i < 3; ++i) put(&buf_t_[kTripleSlot * (pos + l) + 3 * i], g[l][i], f[l] * w[l]);
+  }
+  const bool slopes = !gq_t_.empty();
+  band_costs4(b4, st, loadu4(f), w / (Lm * splat4(m_.force_scale)), m_.use_bend, m_.memory, &Lm, &cost_t_[pos],
+              slopes ? &gq_t_[pos] : nullptr, slopes ? &gf_t_[pos] : nullptr);
+}
+#endif
 
 void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* settle) {
   int64_t ids[3];
@@ -498,7 +584,11 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
         double sn[4], co[4], th[4];
         bend_terms_four(t, g, sn, co);
         turn_atan2_four(sn, co, th);
+#if DRAPE_LANES
+        triple_bands(run, k, th, g, z, settle);
+#else
         for (int l = 0; l < 4; ++l) triple_band(run.items[k + l], run.base + k + l, th[l], g[l], z, settle);
+#endif
       },
       [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
 }
@@ -545,9 +635,57 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   }
 }
 
+void Evaluator::shear_forces(const ItemRun& run, const double* z, double* settle) {
+#if DRAPE_LANES
+  in_fours(
+      run,
+      [&](int64_t k) {
+        double phi[4], sn[4][4], co[4][4];
+        V g[4][4];
+        for (int l = 0; l < 4; ++l) {
+          int64_t ids[4];
+          cell_ids(run.items[k + l], run.base + k + l, ids);
+          shear_cell_terms(cell_at(ids, z).x, g[l], sn[l], co[l]);
+        }
+        shear_angles_four(sn, co, phi);
+        shear_bands(run, k, phi, g, z, settle);
+      },
+      [&](int64_t k) { shear_forces(run.items[k], run.base + k, z, settle); });
+#else
+  for (int64_t k = run.begin; k < run.end; ++k) shear_forces(run.items[k], run.base + k, z, settle);
+#endif
+}
+
+#if DRAPE_LANES
+void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V g[4][4], const double* z,
+                            double* settle) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  const D4 A{c_.shear_area[s[0]], c_.shear_area[s[1]], c_.shear_area[s[2]], c_.shear_area[s[3]]};
+  const D4 rest{c_.shear_rest[s[0]], c_.shear_rest[s[1]], c_.shear_rest[s[2]], c_.shear_rest[s[3]]};
+  BandValue bv[4];
+  for (int l = 0; l < 4; ++l) bv[l] = m_.shear.at(phi[l]);
+  const BandFour b4 = band_four(bv);
+  const StopFour st = band_stop4(loadu4(&anc_s_[pos]), splat4(m_.shear.reversal()), b4);
+  double f[4];
+  for (int l = 0; l < 4; ++l) {
+    const Band::Stop stl{st.f[l], st.df_dq[l]};
+    active_.note(2, pos + l, phi[l], bv[l], stl);
+    const int64_t t = c_.layout.shear() + s[l];
+    f[l] = settle ? (settle[t] = stl.f) : z[t];
+    if (settle && keep_) kept_gradients(A[l] * stl.df_dq, g[l], 4, &kg_s_[kKgCell * (pos + l)]);
+    for (int i = 0; i < 4; ++i) put(&buf_s_[kShearSlot * (pos + l) + 3 * i], g[l][i], f[l] * A[l]);
+  }
+  const bool slopes = !gq_s_.empty();
+  band_costs4(b4, st, loadu4(f), A / (rest * splat4(m_.force_scale)), m_.use_shear, m_.memory, nullptr,
+              &cost_s_[pos], slopes ? &gq_s_[pos] : nullptr, slopes ? &gf_s_[pos] : nullptr);
+}
+#endif
+
 // ---- pass 2: Newton residual per free particle ---------------------------
 
-double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho) {
+double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho,
+                                    const InertiaTerms& it) {
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
     return 0;
@@ -555,8 +693,8 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
   const double* x = z + 3 * p;
   const double* x1 = &c_.x1[3 * p];
   const double* x2 = &c_.x2[3 * p];
-  const double ca = m_.accel_coeff(), ratio = m_.dt / m_.dt_prev, mass = c_.mass[p];
-  const double cd = m_.drag / m_.dt;
+  const double ca = it.accel, ratio = it.ratio, mass = c_.mass[p];
+  const double cd = it.drag;
   double fc[3];
   contact_force(m_.contact, x, fc);
   friction_force(m_.contact, x, x1, fc);
@@ -572,7 +710,7 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
   });
   if (!lists_.hanging.empty())  // forces passed on by hanging particles (zero elsewhere)
     for (int k = 0; k < 3; ++k) r[k] += hres_[3 * p + k];
-  const double inv = 1.0 / m_.force_scale;
+  const double inv = it.inv_scale;
   for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
   return 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
 }
@@ -686,7 +824,8 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
 
 // ---- pass 4: gather per free particle ------------------------------------
 
-void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad) {
+void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad,
+                                  const InertiaTerms& it) {
   const double* rho = &rho_grid_[3 * p];
   double g[3] = {0, 0, 0};
   if (m_.use_newton) {
@@ -694,7 +833,7 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
     if (m_.self_contact) self_.add_jtr(p, z, rho_grid_.data(), jtr);
-    const double mca = c_.mass[p] * m_.inertia_coeff();
+    const double mca = c_.mass[p] * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
   gather_listed(row, [&](const double* v) {
@@ -738,12 +877,13 @@ void Evaluator::rebalance(ListCuts* const* cuts, int n) const {
 // residual (with `grid`, at z's indices too, for a gradient). settle: see
 // settled_cost.
 CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
+  const InertiaTerms it = inertia_terms();
   elements_then_particles([&](const ItemRun& run) { edge_forces(run, z, settle); },
                           [&](const ItemRun& run) { triple_forces(run, z, settle); },
-                          [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, settle); }, [&] { hanging_forces(z); },
+                          [&](const ItemRun& run) { shear_forces(run, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) {
                             double* rho = &rho_[3 * pos];
-                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it);
                             if (grid) std::copy(rho, rho + 3, &rho_grid_[3 * p]);
                           });
   clear_hanging(hres_);
@@ -815,6 +955,7 @@ CostTerms Evaluator::cost_for_gradient(double* z) {
 }
 
 void Evaluator::gradient_at_last_cost(double* grad) {
+  const InertiaTerms it = inertia_terms();
   if (!cost_z_) throw std::logic_error("gradient_at_last_cost: no cost_for_gradient before it");
   const double* z = cost_z_;
   cost_z_ = nullptr;
@@ -827,7 +968,7 @@ void Evaluator::gradient_at_last_cost(double* grad) {
   elements_then_particles([&](const ItemRun& run) { edge_gradient(run, z, grad); },
                           [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
-                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); });
+                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad, it); });
   hanging_gradient(z, grad);
 }
 
@@ -835,18 +976,19 @@ void Evaluator::gradient_at_last_cost(double* grad) {
 // each element's and particle's arithmetic is the same, and every sum in
 // the same order), with barriers where a pass reads the one before.
 CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
+  const InertiaTerms it = inertia_terms();
   auto cost_e = [&](const ItemRun& run) { edge_forces(run, z, nullptr); };
   auto cost_t = [&](const ItemRun& run) { triple_forces(run, z, nullptr); };
-  auto cost_s = [&](int64_t s, int64_t pos) { shear_forces(s, pos, z, nullptr); };
+  auto cost_s = [&](const ItemRun& run) { shear_forces(run, z, nullptr); };
   auto residual = [&](int64_t p, int64_t pos) {
     double* rho = &rho_[3 * pos];
-    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho);
+    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it);
     std::copy(rho, rho + 3, &rho_grid_[3 * p]);
   };
   auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
   auto grad_t = [&](const ItemRun& run) { triple_gradient(run, z, grad); };
   auto grad_s = [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); };
-  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad); };
+  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad, it); };
   ListCuts* cost_cuts[7] = {};
   ListCuts* grad_cuts[7] = {};
   element_cuts<decltype(cost_e), decltype(cost_t), decltype(cost_s)>(cost_cuts);
@@ -1058,7 +1200,7 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
       double rho[3];  // scratch: the window's own
-      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho);
+      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho, inertia_terms());
       for (int d = 0; d < 2; ++d) {
         if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
         if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];

@@ -231,6 +231,11 @@ class Evaluator {
   void edge_forces(const ItemRun& run, const double* z, double* settle);
   // The edge's band, force and cost from its length L and its gradient g.
   void edge_band(int64_t s, int64_t pos, double L, const V3<double> g[2], const double* z, double* settle);
+  // The same for the four edges at run positions k..k+3 (lengths L,
+  // gradients g), the band's arithmetic in lanes (band_K.hpp; with
+  // DRAPE_LANES): edge_band's numbers bit for bit.
+  void edge_bands(const ItemRun& run, int64_t k, const double L[4], const V3<double> g[4][2], const double* z,
+                  double* settle);
   // The four edges at run positions k..k+3: their ends' positions, their ends.
   void edge_four(const ItemRun& run, int64_t k, const double* z, EdgeFour& e, int64_t ends[4][2]) const;
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
@@ -238,9 +243,19 @@ class Evaluator {
   void triple_forces(const ItemRun& run, const double* z, double* settle);
   // The triple's band, force and cost from its angle th and its gradient g.
   void triple_band(int64_t s, int64_t pos, double th, const V3<double> g[3], const double* z, double* settle);
+  // The four triples at run positions k..k+3 (angles th, gradients g),
+  // likewise: triple_band's numbers bit for bit.
+  void triple_bands(const ItemRun& run, int64_t k, const double th[4], const V3<double> g[4][3], const double* z,
+                    double* settle);
   // The four triples at run positions k..k+3: their positions and axes, their particles.
   void triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const;
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
+  // A run of the cells' list: with DRAPE_LANES four cells' angles and bands
+  // at a time (shear_angles_four, shear_bands), shear_forces' numbers bit
+  // for bit; else cell by cell.
+  void shear_forces(const ItemRun& run, const double* z, double* settle);
+  void shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V3<double> g[4][4], const double* z,
+                   double* settle);
   CostTerms cost_pass(double* z, double* settle, bool grid);
   void size_slopes();
   // Sizes the arrays kept in list order (and the rows) for the lists now:
@@ -255,8 +270,16 @@ class Evaluator {
   void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
   void triple_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
+  // The Newton residual's coefficients of the step (each a division),
+  // computed once a pass rather than once a particle.
+  struct InertiaTerms {
+    double accel, ratio, drag, inv_scale, inertia;
+  };
+  InertiaTerms inertia_terms() const {
+    return {m_.accel_coeff(), m_.dt / m_.dt_prev, m_.drag / m_.dt, 1.0 / m_.force_scale, m_.inertia_coeff()};
+  }
   // Particle p's scaled residual into rho (3); returns its Newton cost.
-  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho);
+  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho, const InertiaTerms& it);
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void edge_gradient(const ItemRun& run, const double* z, double* grad);
   void edge_gradient_out(int64_t s, int64_t pos, const V3<double>& ra, const V3<double>& rb, const V3<double> g[2],
@@ -268,7 +291,7 @@ class Evaluator {
   void triple_gradient_out(int64_t s, int64_t pos, const V3<double> r[3], const V3<double> g[3],
                            const V3<double> hr[3], const double* z, double* grad);
   void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
-  void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad);
+  void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad, const InertiaTerms& it);
   // Element passes: this rank's elements, then the ghost ring's (split in
   // chunks as active lists whatever the schedule: the ring has no tiles).
   template <class F>

@@ -7,6 +7,7 @@
 // templated kernels on Dual are their reference); the product and diagonal
 // kernels read the numbers Newton's linear solve keeps (kept_K for triples
 // and cells).
+#include "solver/elements/band_K.hpp"
 #include "solver/elements/edge_K.hpp"
 #include "solver/elements/kept_K.hpp"
 #include "solver/elements/shear_K.hpp"

@@ -25,6 +25,9 @@ template <>
 inline D4 num<D4>(double a) { return splat4(a); }
 
 inline D4 sqrt4(D4 a) { return (D4)_mm256_sqrt_pd((__m256d)a); }
+// Four consecutive doubles, at any alignment.
+inline D4 loadu4(const double* p) { return (D4)_mm256_loadu_pd(p); }
+inline void storeu4(double* p, D4 a) { _mm256_storeu_pd(p, (__m256d)a); }
 template <>
 inline D4 root<D4>(D4 a) { return sqrt4(a); }
 

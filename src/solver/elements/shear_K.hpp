@@ -96,6 +96,30 @@ inline T shear_angle_of(const T s[4], const T co[4]) {
   return T(0.25) * (angle(pi, pr) + angle(qi, qr));
 }
 
+// Four cells' angles from their corners' s and co (cell l's in s[l], co[l]),
+// shear_angle_of's numbers bit for bit: where all four take its one-atan2
+// form (the common case) the four atan2 in lanes (turn_atan2_four), else
+// cell by cell.
+inline void shear_angles_four(const double s[4][4], const double co[4][4], double phi[4]) {
+  double y[4], x[4];
+  bool one = true;
+  for (int l = 0; l < 4; ++l) {
+    const double* a = s[l];
+    const double* c = co[l];
+    const double pr = a[0] * a[1] + c[0] * c[1], pi = c[0] * a[1] - a[0] * c[1];
+    const double qr = a[3] * a[2] + c[3] * c[2], qi = c[3] * a[2] - a[3] * c[2];
+    one = one && pr > 0 && qr > 0;
+    y[l] = pr * qi + pi * qr;
+    x[l] = pr * qr - pi * qi;
+  }
+  if (!one) {
+    for (int l = 0; l < 4; ++l) phi[l] = shear_angle_of(s[l], co[l]);
+    return;
+  }
+  turn_atan2_four(y, x, phi);
+  for (int l = 0; l < 4; ++l) phi[l] = 0.25 * phi[l];
+}
+
 // The corners one after another (any scalar: Dual too).
 template <class T, bool Angle = true>
 inline T shear_cell_scalar(const V3<T> x[4], V3<T> g[4]) {
@@ -136,8 +160,9 @@ inline void shear_lanes_add(const V4 gq[3], V3<double> out[4]) {
 
 // shear_cell_scalar on doubles with the four corners' shear_terms in lanes:
 // its numbers bit for bit (tests: ShearLanes.*).
-template <bool Angle>
-inline double shear_cell_lanes(const V3<double> x[4], V3<double> g[4]) {
+// shear_cell_lanes' gradient, and its corners' s and co (shear_angle_of's
+// arguments) in place of the angle.
+inline void shear_cell_terms(const V3<double> x[4], V3<double> g[4], double s_out[4], double co_out[4]) {
   const V4 xc = lanes4(x, 0, 1, 2, 3);
   const V4 u = shear_lanes_a(x) - xc, v = shear_lanes_b(x) - xc;
   const V4 w = cross(u, v);
@@ -148,12 +173,18 @@ inline double shear_cell_lanes(const V3<double> x[4], V3<double> g[4]) {
   const V4 gv = is * (u - (co * ib) * v);
   const V4 gq[3] = {wt * (splat4(-1.0) * (gu + gv)), wt * gu, wt * gv};
   shear_lanes_add(gq, g);
-  if constexpr (!Angle) {
+  storeu4(s_out, s);
+  storeu4(co_out, co);
+}
+
+template <bool Angle>
+inline double shear_cell_lanes(const V3<double> x[4], V3<double> g[4]) {
+  double sa[4], ca[4];
+  shear_cell_terms(x, g, sa, ca);
+  if constexpr (!Angle)
     return 0.0;
-  } else {
-    const double sa[4] = {s[0], s[1], s[2], s[3]}, ca[4] = {co[0], co[1], co[2], co[3]};
+  else
     return shear_angle_of(sa, ca);
-  }
 }
 
 #endif
