@@ -933,6 +933,53 @@ TEST(Evaluator, FusedCostGradientIsTheSeparatePasses) {
   });
 }
 
+// The gradient and the scaling diagonal in the compact order (the nonlinear
+// CG's) are the ones at z's indices, bit for bit, entry by entry: 3 per
+// free particle in list order, then the owned edges', triples' and cells'
+// forces in list order. Every compact entry starts NaN (one left unwritten
+// would show); fused and separate passes, cost then gradient, on a plain
+// mesh and an AMRC one (hanging particles pass their terms to their ends).
+TEST(Evaluator, CompactGradientIsTheGridOne) {
+  for (bool amrc : {false, true})
+    for (bool fused : {true, false}) {
+      const auto w = random_world(23, amrc);
+      Evaluator& ev = w->loop->evaluator();
+      ev.fuse_gradient(fused);
+      const std::string mesh = std::string(amrc ? "AMRC mesh" : "plain mesh") + (fused ? ", fused" : ", separate");
+      if (amrc) {
+        ASSERT_GT(w->lists.hanging.size(), 0u) << mesh << ": no hanging particles: the test does not test them";
+      }
+      const Layout& L = w->cloth.layout;
+      std::vector<int64_t> at;  // compact entry -> z index
+      for (int64_t p : w->lists.particles.items)
+        for (int k = 0; k < 3; ++k) at.push_back(3 * p + k);
+      for (int64_t s : w->lists.edges.items) at.push_back(L.tension() + s);
+      for (int64_t s : w->lists.triples.items) at.push_back(L.moment() + s);
+      for (int64_t s : w->lists.shears.items) at.push_back(L.shear() + s);
+      ASSERT_EQ(int64_t(at.size()), ev.compact_size()) << mesh;
+      std::vector<double> z = w->cloth.z;
+      for (int64_t p : w->lists.particles.items) z[3 * p + 2] += 1e-3 * w->cloth.grid.hi * (p % 5);
+      std::vector<double> grid(z.size(), 0.0), compact(at.size(), std::nan(""));
+      std::vector<double> dgrid(z.size(), 0.0), dcompact(at.size(), std::nan(""));
+      const CostTerms cg = ev.evaluate(z.data(), grid.data());
+      const CostTerms cc = ev.evaluate_compact(z.data(), compact.data());
+      EXPECT_EQ(cg.total(), cc.total()) << mesh;
+      ev.scaling_diagonal(z.data(), dgrid.data());
+      ev.scaling_diagonal_compact(z.data(), dcompact.data());
+      std::vector<double> split(at.size(), std::nan(""));
+      ev.cost_for_gradient(z.data());
+      ev.gradient_at_last_cost_compact(split.data());
+      int nonzero = 0;
+      for (size_t c = 0; c < at.size(); ++c) {
+        ASSERT_EQ(grid[at[c]], compact[c]) << mesh << ": gradient entry " << c << " (z index " << at[c] << ")";
+        ASSERT_EQ(grid[at[c]], split[c]) << mesh << ": cost then gradient, entry " << c;
+        ASSERT_EQ(dgrid[at[c]], dcompact[c]) << mesh << ": diagonal entry " << c;
+        nonzero += grid[at[c]] != 0.0;
+      }
+      EXPECT_GT(nonzero, int(at.size()) / 2) << mesh << ": a zero gradient tests nothing";
+    }
+}
+
 // cost_for_gradient(z) then gradient_at_last_cost(grad) gives what
 // evaluate(z, grad) in one parallel region gives, bit for bit: the cost
 // terms, every gradient entry (both start from NaN), the residuals; on a

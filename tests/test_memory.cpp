@@ -141,34 +141,39 @@ TEST(Memory, EvaluatorHoldsItsListsOnly) {
 }
 
 // On grid sequencing's level 2 (a sixteenth of the particles) each of those
-// arrays holds under a fifth of its finest-mesh bytes: one sized by the
-// grid again fails here, by name.
+// arrays holds under a fifth of its finest-mesh bytes, with either solver:
+// one sized by the grid again fails here, by name.
 TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
-  Scene s;
-  s.cloth.particles = {129, 129};
-  s.cloth.tile = 16;
-  Simulation w(s, test_fabric());
-  w.step();
-  const std::map<std::string, size_t> finest = list_sized_rows(*w.loop);
-  Amrc amrc(w.cloth, 2);
-  amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, 2);
-  std::vector<int> all(w.tiling.count());
-  for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
-  build_active_lists(w.cloth, w.tiling, all, w.lists);
-  w.loop->mesh_changed(true);
-  w.step();
-  int checked = 0;
-  for (const auto& [name, bytes] : list_sized_rows(*w.loop)) {
-    const size_t before = finest.at(name);
-    if (before == 0) continue;
-    ++checked;
-    std::printf("%-60s %9zu -> %7zu bytes\n", name.c_str(), before, bytes);
-    EXPECT_LT(bytes, before / 5) << name << ": sized by the grid, not the lists?";
+  for (SolverMethod method : {SolverMethod::Newton, SolverMethod::Cg}) {
+    Scene s;
+    s.cloth.particles = {129, 129};
+    s.cloth.tile = 16;
+    s.solver.method = method;
+    Simulation w(s, test_fabric());
+    w.step();
+    const std::map<std::string, size_t> finest = list_sized_rows(*w.loop);
+    Amrc amrc(w.cloth, 2);
+    amrc.set_uniform_level(w.cloth, w.fabric.density, s.cloth.shear, 2);
+    std::vector<int> all(w.tiling.count());
+    for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
+    build_active_lists(w.cloth, w.tiling, all, w.lists);
+    w.loop->mesh_changed(true);
+    w.step();
+    int checked = 0;
+    for (const auto& [name, bytes] : list_sized_rows(*w.loop)) {
+      const size_t before = finest.at(name);
+      if (before == 0) continue;
+      ++checked;
+      std::printf("%s: %-60s %9zu -> %7zu bytes\n", to_string(method), name.c_str(), before, bytes);
+      EXPECT_LT(bytes, before / 5) << to_string(method) << ": " << name << ": sized by the grid, not the lists?";
+    }
+    const char* solver_row = method == SolverMethod::Cg ? "Minimizer: g, g new, s, d, z0, diagonal (nonlinear CG, compact)"
+                                                        : "NewtonSolver: d, r, s, diagonal (compact); p, K p (own numbering)";
+    for (const char* must : {"Evaluator: residual", "Evaluator: particles' Newton costs",
+                             "TimeLoop: saved unknowns (a step's retry)", solver_row})
+      EXPECT_GT(finest.at(must), 0u) << to_string(method) << ": " << must << ": not checked";
+    EXPECT_GE(checked, 10) << to_string(method);
   }
-  for (const char* must : {"Evaluator: residual", "Evaluator: particles' Newton costs",
-                           "TimeLoop: saved unknowns (a step's retry)"})
-    EXPECT_GT(finest.at(must), 0u) << must << ": not checked";
-  EXPECT_GE(checked, 10);
 }
 
 // Keeping the products again (keep_products sizes its arrays to the lists,

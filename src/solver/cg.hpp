@@ -86,6 +86,18 @@ class Minimizer {
   const Tiling& tiling() const { return tiling_; }
   // Gives its vectors back (a later minimize() sizes them again).
   void release();
+  // After the lists changed: its vectors, where held, grow to the lists'
+  // unknowns now (fit.hpp's rule), or with `exact` are sized to them.
+  void fit_vectors(bool exact);
+
+  // The nonlinear CG's order of this rank's unknowns (Evaluator's compact
+  // order): each tile's sums run through it in the tile's z order, so
+  // they are dot()'s over z, bit for bit. f(c, k): compact c, z index k.
+  template <class F>
+  void for_each_compact(F&& f);
+  // K tile-ordered sums of f(c, acc) over that order.
+  template <int K, class F>
+  void block_sums(F&& f, double* out);
 
  private:
   // Each tile's first compact number (tile_c_), for the lists' stamp and `end`.
@@ -94,13 +106,26 @@ class Minimizer {
   void tile_runs(int64_t end, F&& per_tile);
 
   CostTerms eval(Evaluator& ev, double* z, double* g, bool numeric);
-  void size_vectors();
+  // The numeric gradient (reference mode) at z's indices, gathered into g.
+  CostTerms numeric(Evaluator& ev, double* z, double* g);
+  void size_vectors(bool numeric);
+  double compact_dot(const double* a, const double* b) {
+    double out;
+    block_sums<1>([&](int64_t c, double* acc) { acc[0] += a[c] * b[c]; }, &out);
+    return out;
+  }
+  // Where each block of the compact order starts (positions, tensions,
+  // moments, shears) and ends (the last).
+  void block_starts(int64_t b[5]) const;
 
   const Cloth& c_;
   const ActiveLists& lists_;
   const Tiling& tiling_;
   const Reducer& red_;
-  std::vector<double> g_, gn_, s_, d_, zt_, diag_, partials_;
+  // Compact: the gradient, the trial's, the scaled gradient, the direction,
+  // the line search's start and the scaling diagonal.
+  std::vector<double> g_, gn_, s_, d_, z0_, diag_, partials_;
+  std::vector<double> numeric_;  // the numeric gradient at z's indices (reference mode only)
   std::vector<int64_t> tile_c_;  // tiles + 1
   uint64_t c_stamp_ = 0;
   int64_t c_end_ = -1;
@@ -163,6 +188,51 @@ void Minimizer::compact_sums(int64_t end, F&& f, double* out) {
       double acc[K] = {};
       const int64_t lo = tc[t], hi = tc[t + 1];
       for (int64_t c = lo; c < hi; ++c) f(c, acc);
+      for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
+    }
+  });
+  red_.sum_tiles(lists_.tiles, partials_.data(), K, out);
+}
+
+template <class F>
+void Minimizer::for_each_compact(F&& f) {
+  int64_t b[5];
+  block_starts(b);
+  const ActiveList* L[4] = {&lists_.particles, &lists_.edges, &lists_.triples, &lists_.shears};
+  const int64_t z0[4] = {0, c_.layout.tension(), c_.layout.moment(), c_.layout.shear()};
+  timed_region([&] {
+    for (int k = 0; k < 4; ++k) {
+      const int64_t* items = L[k]->items.data();
+      const int64_t n = L[k]->size(), c0 = b[k], zk = z0[k];
+      if (k == 0) {
+#pragma omp for schedule(static) nowait
+        for (int64_t r = 0; r < n; ++r)
+          for (int j = 0; j < 3; ++j) f(3 * r + j, 3 * items[r] + j);
+      } else {
+#pragma omp for schedule(static) nowait
+        for (int64_t r = 0; r < n; ++r) f(c0 + r, zk + items[r]);
+      }
+    }
+  });
+}
+
+template <int K, class F>
+void Minimizer::block_sums(F&& f, double* out) {
+  static_assert(K >= 1 && K <= 2, "partials_ holds two sums per tile (Minimizer's constructor)");
+  int64_t b[5];
+  block_starts(b);
+  const ActiveList* L[4] = {&lists_.particles, &lists_.edges, &lists_.triples, &lists_.shears};
+  const int nt = int(lists_.tiles.size());
+  timed_region([&] {
+#pragma omp for schedule(static) nowait
+    for (int t = 0; t < nt; ++t) {
+      double acc[K] = {};
+      // The tile's positions, tensions, moments, shears: its runs' order in z.
+      for (int k = 0; k < 4; ++k) {
+        const int64_t w = k == 0 ? 3 : 1;
+        const int64_t lo = b[k] + w * L[k]->tile_begin[t], hi = b[k] + w * L[k]->tile_begin[t + 1];
+        for (int64_t c = lo; c < hi; ++c) f(c, acc);
+      }
       for (int j = 0; j < K; ++j) partials_[size_t(j) * nt + t] = acc[j];
     }
   });

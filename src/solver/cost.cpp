@@ -161,6 +161,18 @@ void Evaluator::memory(MemoryTable& t) const {
 // (lists_.tiles ascending) and along the ring: a binary search finds one
 // slot (a row's slots: ListWalk), where a map by slot would be sized by the
 // grid on every rank.
+int64_t Evaluator::particle_entry(int64_t p) const {
+  if (!compact_) return 3 * p;
+  const std::vector<int>& tiles = lists_.tiles;
+  const auto k = std::lower_bound(tiles.begin(), tiles.end(), tiling_.tile_of(p));
+  if (k == tiles.end() || *k != tiling_.tile_of(p)) return -1;
+  const ActiveList& pl = lists_.particles;
+  const size_t kt = size_t(k - tiles.begin());
+  const int64_t *b = pl.items.data() + pl.tile_begin[kt], *e = pl.items.data() + pl.tile_begin[kt + 1];
+  const int64_t* f = std::lower_bound(b, e, p);
+  return f != e && *f == p ? 3 * (f - pl.items.data()) : -1;
+}
+
 int64_t Evaluator::position_of(int kind, int64_t s) const {
   const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
   const ActiveList* ring[3] = {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears};
@@ -763,7 +775,7 @@ void Evaluator::edge_gradient_out(int64_t s, int64_t pos, const V& ra, const V& 
   const double fw = f * w / m_.force_scale, gq = gq_e_[pos];
   put(&buf_e_[kEdgeSlot * pos], (-fw) * hv + gq * g[0], 1.0);
   put(&buf_e_[kEdgeSlot * pos + 3], fw * hv + gq * g[1], 1.0);
-  grad[c_.layout.tension() + s] = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[pos];
+  if (double* o = force_entry(grad, 0, s, pos)) *o = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[pos];
 }
 
 void Evaluator::triple_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
@@ -801,7 +813,7 @@ void Evaluator::triple_gradient_out(int64_t s, int64_t pos, const V r[3], const 
     put(&buf_t_[kTripleSlot * pos + 3 * k], fw * hr[k] + gq * g[k], 1.0);
     gr += dot(g[k], r[k]);
   }
-  grad[c_.layout.moment() + s] = w * gr / m_.force_scale + gf_t_[pos];
+  if (double* o = force_entry(grad, 1, s, pos)) *o = w * gr / m_.force_scale + gf_t_[pos];
 }
 
 void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
@@ -819,12 +831,12 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
     put(&buf_s_[kShearSlot * pos + 3 * k], fa * hr[k] + gq * g[k], 1.0);
     gr += dot(g[k], r[k]);
   }
-  grad[c_.layout.shear() + s] = A * gr / m_.force_scale + gf_s_[pos];
+  if (double* o = force_entry(grad, 2, s, pos)) *o = A * gr / m_.force_scale + gf_s_[pos];
 }
 
 // ---- pass 4: gather per free particle ------------------------------------
 
-void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad,
+void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, const double* z, double* grad,
                                   const InertiaTerms& it) {
   const double* rho = &rho_grid_[3 * p];
   double g[3] = {0, 0, 0};
@@ -841,7 +853,8 @@ void Evaluator::particle_gradient(int64_t p, const GatherRow& row, const double*
     g[1] += v[1];
     g[2] += v[2];
   });
-  for (int k = 0; k < 3; ++k) grad[3 * p + k] = g[k];
+  const int64_t o = particle_entry(p, pos);
+  for (int k = 0; k < 3; ++k) grad[o + k] = g[k];
 }
 
 // ---- driver ---------------------------------------------------------------
@@ -925,10 +938,13 @@ void Evaluator::fit_slopes(bool exact) {
   for (auto* v : {&gq_s_, &gf_s_}) fit(*v, ns, n, exact, 0.0);
 }
 
-CostTerms Evaluator::evaluate(double* z, double* grad) {
+CostTerms Evaluator::evaluate(double* z, double* grad) { return evaluate_as(z, grad, false); }
+
+CostTerms Evaluator::evaluate_as(double* z, double* grad, bool compact) {
+  compact_ = compact;
   if (grad && !fused_) {
     const CostTerms cost = cost_for_gradient(z);
-    gradient_at_last_cost(grad);
+    gradient_as(grad, compact);
     return cost;
   }
   cost_z_ = nullptr;
@@ -954,21 +970,27 @@ CostTerms Evaluator::cost_for_gradient(double* z) {
   return cost;
 }
 
-void Evaluator::gradient_at_last_cost(double* grad) {
+void Evaluator::gradient_at_last_cost(double* grad) { gradient_as(grad, false); }
+
+// The gradient's length: z's, or the compact order's.
+int64_t Evaluator::gradient_size() const { return compact_ ? compact_size() : c_.layout.size(); }
+
+void Evaluator::gradient_as(double* grad, bool compact) {
+  compact_ = compact;
   const InertiaTerms it = inertia_terms();
   if (!cost_z_) throw std::logic_error("gradient_at_last_cost: no cost_for_gradient before it");
   const double* z = cost_z_;
   cost_z_ = nullptr;
   halo_.exchange_particles(rho_grid_.data(), 3);
   hanging_residuals();
-  const int64_t nz = c_.layout.size();
+  const int64_t nz = gradient_size();
   parallel_for(nz, [&](int64_t k) { grad[k] = 0.0; });  // a non-unknown's gradient is 0 (tested)
   // The element passes and the particles' gathers in one parallel region,
   // as the cost pass (a fork and join each cost more than a small mesh's pass).
   elements_then_particles([&](const ItemRun& run) { edge_gradient(run, z, grad); },
                           [&](const ItemRun& run) { triple_gradient(run, z, grad); },
                           [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
-                          [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad, it); });
+                          [&](int64_t p, int64_t pos) { particle_gradient(p, pos, rows_[pos], z, grad, it); });
   hanging_gradient(z, grad);
 }
 
@@ -988,14 +1010,14 @@ CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
   auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
   auto grad_t = [&](const ItemRun& run) { triple_gradient(run, z, grad); };
   auto grad_s = [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); };
-  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, rows_[pos], z, grad, it); };
+  auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, pos, rows_[pos], z, grad, it); };
   ListCuts* cost_cuts[7] = {};
   ListCuts* grad_cuts[7] = {};
   element_cuts<decltype(cost_e), decltype(cost_t), decltype(cost_s)>(cost_cuts);
   element_cuts<decltype(grad_e), decltype(grad_t), decltype(grad_s)>(grad_cuts);
   cost_cuts[6] = &cuts_for<decltype(residual)>(lists_.particles);
   grad_cuts[6] = &cuts_for<decltype(gather)>(lists_.particles);
-  const int64_t nz = c_.layout.size();
+  const int64_t nz = gradient_size();
   timed_region([&](RegionTime& rt) {
     // Nothing reads or writes the gradient before the barriers below.
 #pragma omp for schedule(static) nowait
@@ -1083,13 +1105,25 @@ void Evaluator::hanging_residuals() {
 
 // ---- diagonal scaling -----------------------------------------------------
 
-void Evaluator::scaling_diagonal(double* z, double* diag) {
+void Evaluator::scaling_diagonal(double* z, double* diag) { diagonal_as(z, diag, false); }
+
+// The unknowns' entries of a vector `out` laid out like the gradient.
+template <class F>
+void Evaluator::for_each_unknown_entry(double* out, F&& f) {
+  if (compact_)
+    parallel_for(compact_size(), [&](int64_t k) { f(out[k]); });
+  else
+    for_each_listed(lists_.unknown_spans, [&](int64_t k) { f(out[k]); });
+}
+
+void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
+  compact_ = compact;
   list_rows();
   refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) { diag[k] = 1.0; });
+  for_each_unknown_entry(diag, [](double& d) { d = 1.0; });
   // Per element and particle: geometric stiffness (f c |dk/dx| / L)^2 and
   // band stiffness (lambda * slope * dq/dx)^2, written to the first entry of
   // the particle's buffer entry; the element force's own diagonal directly.
@@ -1113,7 +1147,7 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     const double geo = f * w / L, band = w * band_slope(anc_e_[pos], m_.stretch[d], f, eps) / L0;
     for (int k = 0; k < 2; ++k) buf_e_[kEdgeSlot * pos + 3 * k] = (2 * geo * geo + band * band) * inv2;
     const double nf = double(c_.free(p)) + double(c_.free(q));
-    diag[c_.layout.tension() + s] = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
+    if (double* o = force_entry(diag, 0, s, pos)) *o = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
   });
   for_triples([&](int64_t s, int64_t pos) {
     const int d = int(s & 1);
@@ -1133,8 +1167,8 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
       nf += c_.free(ids[k]) ? g2 : 0;
     }
     const double lam = w / Lm;
-    diag[c_.layout.moment() + s] =
-        (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
+    if (double* o = force_entry(diag, 1, s, pos))
+      *o = (w * w * nf + lam * lam * (outside(m_.bend[d], f, th / Lm) + m_.memory)) * inv2;
   });
   for_shears([&](int64_t s, int64_t pos) {
     int64_t ids[4];
@@ -1152,8 +1186,8 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
       nf += c_.free(a.ids[k]) ? g2 : 0;
     }
     const double lam = A / Lr;
-    diag[c_.layout.shear() + s] =
-        (A * A * nf + lam * lam * (outside(m_.shear, f, phi) + m_.memory)) * inv2;
+    if (double* o = force_entry(diag, 2, s, pos))
+      *o = (A * A * nf + lam * lam * (outside(m_.shear, f, phi) + m_.memory)) * inv2;
   });
   const double ca = m_.inertia_coeff();
   for_each_item(lists_.particles, pol_, [&](int64_t p, int64_t pos) {
@@ -1164,7 +1198,8 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather_listed(rows_[pos], [&](const double* v) { dsum += v[0]; });
-    for (int k = 0; k < 3; ++k) diag[3 * p + k] = dsum;
+    const int64_t o = particle_entry(p, pos);
+    for (int k = 0; k < 3; ++k) diag[o + k] = dsum;
   });
   hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], slope = 0;
@@ -1175,8 +1210,8 @@ void Evaluator::scaling_diagonal(double* z, double* diag) {
     v[0] = v[1] = v[2] = dsum;
   }, 2.0, 1.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.
-  for_each_listed(lists_.unknown_spans, [&](int64_t k) {
-    if (!(diag[k] > 0)) diag[k] = 1.0;
+  for_each_unknown_entry(diag, [](double& d) {
+    if (!(d > 0)) d = 1.0;
   });
 }
 

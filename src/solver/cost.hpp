@@ -83,6 +83,25 @@ class Evaluator {
   // scaling of the unknowns. Entries of non-unknowns are set to 1.
   void scaling_diagonal(double* z, double* diag);
 
+  // The three above with the gradient and diagonal in the compact order of
+  // this rank's unknowns (compact_size() entries): 3 per free particle in
+  // the particle list's order, then one per owned edge, triple and cell in
+  // their lists' order. The same numbers as at z's indices, bit for bit
+  // (Evaluator.CompactGradientIsTheGridOne): the nonlinear CG's vectors,
+  // none of the grid's size.
+  CostTerms evaluate_compact(double* z, double* grad) { return evaluate_as(z, grad, true); }
+  void gradient_at_last_cost_compact(double* grad) { gradient_as(grad, true); }
+  void scaling_diagonal_compact(double* z, double* diag) { diagonal_as(z, diag, true); }
+  int64_t compact_size() const { return compact_block(3) + lists_.shears.size(); }
+  // Where a block of the compact order starts (0 positions, 1 tensions,
+  // 2 moments, 3 shears).
+  int64_t compact_block(int b) const {
+    const int64_t n[4] = {3 * lists_.particles.size(), lists_.edges.size(), lists_.triples.size(), 0};
+    int64_t c = 0;
+    for (int k = 0; k < b; ++k) c += n[k];
+    return c;
+  }
+
   // --- the Newton solver's view (src/solver/stiffness.cpp) ---
   // hysteresis_forces(z) then evaluate(z, nullptr), bit for bit, in one pass
   // over the elements: each element's strain, band and geometry are computed
@@ -291,7 +310,30 @@ class Evaluator {
   void triple_gradient_out(int64_t s, int64_t pos, const V3<double> r[3], const V3<double> g[3],
                            const V3<double> hr[3], const double* z, double* grad);
   void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
-  void particle_gradient(int64_t p, const GatherRow& row, const double* z, double* grad, const InertiaTerms& it);
+  void particle_gradient(int64_t p, int64_t pos, const GatherRow& row, const double* z, double* grad,
+                         const InertiaTerms& it);
+  // The entry points above, the gradient or diagonal at z's indices or in
+  // the compact order (compact_ while they run).
+  CostTerms evaluate_as(double* z, double* grad, bool compact);
+  void gradient_as(double* grad, bool compact);
+  void diagonal_as(double* z, double* diag, bool compact);
+  bool compact_ = false;
+  int64_t gradient_size() const;
+  template <class F>
+  void for_each_unknown_entry(double* out, F&& f);
+  // Where the element at list position pos of kind (0 edge, 1 triple,
+  // 2 cell), slot s, keeps its force's entry in the gradient or diagonal;
+  // null for the ring's in the compact order (other ranks' unknowns).
+  double* force_entry(double* out, int kind, int64_t s, int64_t pos) const {
+    const int64_t block[3] = {c_.layout.tension(), c_.layout.moment(), c_.layout.shear()};
+    if (!compact_) return out + block[kind] + s;
+    const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
+    return pos < own[kind]->size() ? out + compact_block(kind + 1) + pos : nullptr;
+  }
+  // A free particle's first entry: its position in z, or 3 x its place in
+  // the particle list (-1 where it is not this rank's: a ghost).
+  int64_t particle_entry(int64_t p) const;
+  int64_t particle_entry(int64_t p, int64_t pos) const { return compact_ ? 3 * pos : 3 * p; }
   // Element passes: this rank's elements, then the ghost ring's (split in
   // chunks as active lists whatever the schedule: the ring has no tiles).
   template <class F>
@@ -666,11 +708,14 @@ inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, d
     }
   }
   for (const HangingLink& g : lists_.hanging)
-    for (int64_t e : {g.a, g.b})
+    for (int64_t e : {g.a, g.b}) {
+      const int64_t o = c_.free(e) ? particle_entry(e) : -1;
       for (int k = 0; k < 3; ++k) {
-        if (c_.free(e)) out[3 * e + k] += hpend_[3 * e + k];
+        if (o >= 0) out[o + k] += hpend_[3 * e + k];
         hpend_[3 * e + k] = 0.0;  // applied once
       }
+    }
+  if (compact_) return;  // a hanging particle has no entry there
   for (const HangingLink& g : lists_.hanging)
     for (int k = 0; k < 3; ++k) out[3 * g.h + k] = fill;
 }

@@ -69,13 +69,14 @@ class TimeLoop {
   }
 
   // After AMRC changed the mesh (and the lists were rebuilt): the
-  // evaluator's arrays and Newton's compact vectors grow here, not in the
+  // evaluator's arrays and the solvers' compact vectors grow here, not in the
   // next step, where the lists outgrew them; with `new_stage` (grid
   // sequencing's next level) they are sized to the new lists, shrinking too
   // (Evaluator::fit_to_lists).
   void mesh_changed(bool new_stage = false) {
     ev_.fit_to_lists(new_stage);
     newton_.fit_vectors(ev_);
+    cg_.fit_vectors(new_stage);
     fit_saved(new_stage);
     free_ = red_.sum_i64(lists_.particles.size());
   }

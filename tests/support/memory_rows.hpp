@@ -1,8 +1,8 @@
 #pragma once
 // The solvers' arrays that still follow the grid, by name: what only a
-// gradient (the nonlinear CG's), AMRC's hanging particles' forces or K's
-// assembly hold. Newton's product vectors are in the evaluator's own
-// numbering and checked like the rest. Every other array of the evaluator's, Newton's and the
+// gradient at z's indices, AMRC's hanging particles' forces or K's
+// assembly hold. Newton's product vectors (own numbering) and the
+// nonlinear CG's (compact) are checked like the rest. Every other array of the evaluator's, Newton's and the
 // time loop's tables holds this rank's listed elements, rows or unknowns
 // (test_memory, test_mpi_memory_np2 check it).
 #include <map>
@@ -19,7 +19,6 @@ inline bool follows_the_grid(const MemoryTable::Row& r) {
       "Evaluator: hanging particles' forces and results",
       "Evaluator: assembly maps",
       "Evaluator: numeric gradient's copy of z",
-      "Minimizer: g, g new, s, d, zt, diagonal (nonlinear CG)",
   };
   const std::string key = r.owner + ": " + r.array;
   for (const char* n : named)
