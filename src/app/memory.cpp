@@ -76,11 +76,12 @@ int64_t estimated_bytes_per_rank(int64_t n, int ranks, bool nonlinear_cg) {
   // 86 MB: its vectors are larger than Newton's. Rounded up, for a margin.
   // Of those, the arrays sized by the rank's lists (the evaluator's in list
   // order, Newton's compact vectors, the lists: 1168 of 1667 listed bytes a
-  // particle at 1000 x 1000) fall with more ranks; the cloth's, the
-  // residual, the vectors at z's positions and the nonlinear CG's stay the
-  // grid's. A rank's lists are counted as 1.5 times its share of the grid
-  // (METIS's imbalance, AMRC's rebalancing), at most the whole.
-  const int64_t grid = nonlinear_cg ? 1050 : 650, listed = nonlinear_cg ? 1050 : 1250;
+  // particle at 1000 x 1000) fall with more ranks, and so do the nonlinear
+  // CG's six vectors (384 bytes, in the compact order of the rank's own
+  // unknowns); the cloth's, the residual and the vectors at z's positions
+  // stay the grid's. A rank's lists are counted as 1.5 times its share of the
+  // grid (METIS's imbalance, AMRC's rebalancing), at most the whole.
+  const int64_t grid = nonlinear_cg ? 700 : 650, listed = nonlinear_cg ? 1400 : 1250;
   const int64_t fixed = int64_t(96) << 20;
   const double share = std::min(1.0, 1.5 / std::max(1, ranks));
   return fixed + grid * n + int64_t(double(listed) * share * double(n));
