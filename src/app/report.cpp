@@ -176,6 +176,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   // Several ranks: what each rank receives to run the replicated V-cycle.
   const Summary::Gathered& mg = s.multigrid_gathered;
   j.begin_object("multigrid_gathered")
+      .value("builds", (long long)mg.build_count)
       .value("per_build_bytes", (long long)mg.build)
       .value("per_cycle_bytes", (long long)mg.cycle)
       .value("builds_bytes", (long long)mg.builds)
@@ -284,7 +285,7 @@ void print_timing_table(const Timers& tm, double wall, double cpu, const std::st
   std::printf("%-16s %12.3f   (all ranks and threads)\n", "cpu", cpu);
   std::printf("%-16s %12.1f   MB (the largest rank's)\n", "peak RSS", 1e-6 * double(peak_rss));
   if (gathered.build > 0)  // the replicated V-cycle's inputs, received by each rank
-    std::printf("%-16s %12.1f   MB a build (K's rows), %.2f MB a V-cycle; %.1f MB in all\n", "multigrid gather",
+    std::printf("%-16s %12.1f   MB a build (K's rows), %.2f MB a V-cycle; %.1f MB received in all\n", "multigrid gather",
                 1e-6 * double(gathered.build), 1e-6 * double(gathered.cycle),
                 1e-6 * double(gathered.builds + gathered.cycles));
   std::printf("state checksum   %s\n", checksum.c_str());

@@ -79,9 +79,9 @@ struct Summary {
   std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
   // Bytes gathered into each rank for the multigrid (0 on one rank): K's
   // rows at the last build and a V-cycle's right-hand side, and their sums
-  // over this process's builds and V-cycles.
+  // over this process's builds and V-cycles; the builds (either way).
   struct Gathered {
-    int64_t build = 0, cycle = 0, builds = 0, cycles = 0;
+    int64_t build = 0, cycle = 0, builds = 0, cycles = 0, build_count = 0;
   } multigrid_gathered;
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)

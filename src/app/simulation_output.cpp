@@ -186,7 +186,8 @@ void Simulation::write_final_state(double& depth, std::string& checksum) {
   const NewtonSolver& newton = loop->newton();
   sum_.multigrid = newton.multigrid_stats();
   sum_.multigrid_gathered = {newton.multigrid_build_bytes(), newton.multigrid_cycle_bytes(),
-                             newton.multigrid_builds_bytes(), newton.multigrid_cycles_bytes()};
+                             newton.multigrid_builds_bytes(), newton.multigrid_cycles_bytes(),
+                             newton.multigrid_builds()};
   loop->release_solvers();  // stepping is over: the picture reuses their memory
   settle_for_output();
   sum_.penetration_written = max_penetration_written(cloth, model, tiling, dec_.owned, r);
