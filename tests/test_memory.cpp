@@ -240,6 +240,32 @@ TEST(Memory, SolversGiveTheirVectorsBack) {
 }
 
 
+// The gathered level (K, right-hand side and result of every rank's rows)
+// is held only by the multigrid on several ranks: on one rank it stays
+// empty with either preconditioner, and nothing is gathered.
+TEST(Memory, OneRankGathersNoLevel) {
+  for (Preconditioner pc : {Preconditioner::Jacobi, Preconditioner::Multigrid}) {
+    Scene s;
+    s.cloth.particles = {33, 33};
+    s.cloth.tile = 8;
+    s.cloth.height = 0.401;  // contact within a few steps: Newton solves
+    s.solver.method = SolverMethod::Newton;
+    s.solver.preconditioner = pc;
+    Simulation w(s, test_fabric());
+    int solved = 0;
+    for (int k = 0; k < 6; ++k) solved += w.step().iterations;
+    EXPECT_GT(solved, 0);
+    const NewtonSolver& newton = w.loop->newton();
+    if (pc == Preconditioner::Multigrid) EXPECT_GT(newton.multigrid_builds(), 0);
+    MemoryTable t;
+    w.loop->memory(t);
+    EXPECT_TRUE(listed(t, kGatheredLevel));
+    EXPECT_EQ(row_bytes(t, kGatheredLevel), 0u);
+    EXPECT_EQ(newton.multigrid_builds_bytes() + newton.multigrid_cycles_bytes(), 0);
+    EXPECT_EQ(newton.multigrid_build_bytes() + newton.multigrid_cycle_bytes(), 0);
+  }
+}
+
 // The rows find their elements by walking the lists beside the particles
 // (no map by slot): every slot a particle gathers gets the position a plain
 // search of its tile's part of the list (or of the ring) gives, -1 where

@@ -56,6 +56,59 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
     EXPECT_LT(double(bytes), 0.65 * double(all)) << name << ": sized by the grid, not this rank's lists?";
   }
   EXPECT_GE(checked, 10);
+  // With Jacobi no rank gathers the finest level.
+  MemoryTable t;
+  loop.memory(t);
+  EXPECT_TRUE(listed(t, kGatheredLevel));
+  EXPECT_EQ(row_bytes(t, kGatheredLevel), 0u);
+}
+
+// The multigrid on two ranks: each rank receives every rank's rows of K
+// at a build (a row's length, 8 bytes, and a block's column and values,
+// 4 + 72) and a V-cycle's right-hand side (24 bytes a free particle), and
+// holds them, with the V-cycle's result, in the gathered level's row
+// (whose 0 with Jacobi the test above checks).
+TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
+  Scene s;
+  s.cloth.particles = {33, 33};
+  s.cloth.tile = 8;
+  s.cloth.height = 0.401;  // contact within a few steps: Newton solves
+  s.solver.method = SolverMethod::Newton;
+  s.solver.preconditioner = Preconditioner::Multigrid;
+  const Fabric f = test_fabric();
+  Cloth cloth = make_cloth(s, f);
+  Model model = make_model(s, f, cloth.grid.hi, cloth.grid.hj);
+  const Tiling tiling(cloth.grid.ni, cloth.grid.nj, s.cloth.tile);
+  const Decomposition dec = decompose(cloth, tiling, MPI_COMM_WORLD, ghost_widths(false, 0));
+  ActiveLists lists;
+  build_active_lists(cloth, tiling, dec.owned, lists, dec.halo->ring());
+  const LoopPolicy policy{s.parallel.schedule, s.parallel.chunk};
+  TimeLoop loop(cloth, model, lists, tiling, policy, *dec.reducer, s.solver, dec.ghosts());
+  Timers tm;
+  for (int k = 0; k < 6; ++k) loop.step(tm);
+  const NewtonSolver& newton = loop.newton();
+  ASSERT_GT(newton.multigrid_builds(), 0);
+  ASSERT_FALSE(newton.multigrid_stats().empty());
+  const MultigridLevelStats& finest = newton.multigrid_stats()[0];
+  ASSERT_GT(finest.cycles, 0);
+  const int64_t rows = finest.points, blocks = finest.blocks;
+  EXPECT_GT(rows, lists.particles.size());  // the other rank's rows too
+  EXPECT_EQ(newton.multigrid_build_bytes(), 76 * blocks + 8 * rows);
+  EXPECT_EQ(newton.multigrid_cycle_bytes(), 24 * rows);
+  // The pattern stays (no AMRC, no self-contact): every build the same bytes.
+  EXPECT_EQ(newton.multigrid_builds_bytes(), newton.multigrid_builds() * newton.multigrid_build_bytes());
+  EXPECT_EQ(newton.multigrid_cycles_bytes(), finest.cycles * newton.multigrid_cycle_bytes());
+  MemoryTable t;
+  loop.memory(t);
+  const size_t held = row_bytes(t, kGatheredLevel);
+  std::printf("multigrid on a rank of two: %lld rows, %lld blocks gathered, %zu bytes held\n", (long long)rows,
+              (long long)blocks, held);
+  // K (and its row starts), the right-hand side, the result and the
+  // concatenation the vectors arrive in (3 doubles a row each), and the maps:
+  // the global order's particles, its rows in the concatenation and their
+  // starts (8 bytes a row each), the grid's column numbers (4 a particle).
+  const int64_t vectors = 3 * 24 * rows, maps = 3 * 8 * rows + 8 + 4 * cloth.grid.n();
+  EXPECT_GE(held, size_t(76 * blocks + 8 * (rows + 1) + vectors + maps));
 }
 
 }  // namespace

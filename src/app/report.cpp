@@ -173,6 +173,15 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
         .value("setup_seconds", l.setup_seconds)
         .end_object();
   j.end_array();
+  // Several ranks: what each rank receives to run the replicated V-cycle.
+  const Summary::Gathered& mg = s.multigrid_gathered;
+  j.begin_object("multigrid_gathered")
+      .value("builds", (long long)mg.build_count)
+      .value("per_build_bytes", (long long)mg.build)
+      .value("per_cycle_bytes", (long long)mg.cycle)
+      .value("builds_bytes", (long long)mg.builds)
+      .value("cycles_bytes", (long long)mg.cycles)
+      .end_object();
   j.value("simulated_seconds", cloth.time);
   j.value("iterations_per_simulated_second", cloth.time > 0 ? n.iterations / cloth.time : 0.0);
   j.value("max_iterations_in_a_step", (long long)n.max_step_iterations);
@@ -261,7 +270,7 @@ void print_table2(const Table2& t, int threads) {
 }
 
 void print_timing_table(const Timers& tm, double wall, double cpu, const std::string& checksum, const DecompStats& d,
-                        int ranks, int64_t peak_rss) {
+                        int ranks, int64_t peak_rss, const Summary::Gathered& gathered) {
   std::printf("\n%-16s %12s %8s\n", "phase", "seconds", "share");
   for (int p = 0; p < kPhases; ++p)
     std::printf("%-16s %12.3f %7.1f%%\n", phase_name(p), tm.seconds[p],
@@ -275,6 +284,10 @@ void print_timing_table(const Timers& tm, double wall, double cpu, const std::st
   std::printf("%-16s %12.3f\n", "wall", wall);
   std::printf("%-16s %12.3f   (all ranks and threads)\n", "cpu", cpu);
   std::printf("%-16s %12.1f   MB (the largest rank's)\n", "peak RSS", 1e-6 * double(peak_rss));
+  if (gathered.build > 0)  // the replicated V-cycle's inputs, received by each rank
+    std::printf("%-16s %12.1f   MB a build (K's rows), %.2f MB a V-cycle; %.1f MB received in all\n", "multigrid gather",
+                1e-6 * double(gathered.build), 1e-6 * double(gathered.cycle),
+                1e-6 * double(gathered.builds + gathered.cycles));
   std::printf("state checksum   %s\n", checksum.c_str());
   std::fflush(stdout);
 }

@@ -77,6 +77,12 @@ struct Summary {
   DrapeTest drape;                 // the drape test's figures (rank 0's; a drape test's scene)
   int64_t picture_positions = 0;   // the positions rank 0 received to draw the picture
   std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
+  // Bytes gathered into each rank for the multigrid (0 on one rank): K's
+  // rows at the last build and a V-cycle's right-hand side, and their sums
+  // over this process's builds and V-cycles; the builds (either way).
+  struct Gathered {
+    int64_t build = 0, cycle = 0, builds = 0, cycles = 0, build_count = 0;
+  } multigrid_gathered;
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
@@ -117,8 +123,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
                         const Summary& s, const Timers& tm, double wall, double cpu, int ranks, int threads,
                         const std::string& checksum, double penetration_depth, int64_t free_particles);
 void print_table2(const Table2& t, int threads);
-// peak_rss: bytes, the largest rank's.
+// peak_rss: bytes, the largest rank's; gathered: the multigrid's on several ranks (a line where not 0).
 void print_timing_table(const Timers& tm, double wall, double cpu, const std::string& checksum, const DecompStats& d,
-                        int ranks, int64_t peak_rss);
+                        int ranks, int64_t peak_rss, const Summary::Gathered& gathered = {});
 
 }  // namespace drape

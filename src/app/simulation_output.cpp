@@ -183,7 +183,11 @@ void Simulation::write_final_state(double& depth, std::string& checksum) {
   const Reducer& r = red();
   depth = max_penetration(cloth, model, lists, r);
   sum_.zigzag = count_zigzags(cloth, lists.particles.items, r);
-  sum_.multigrid = loop->newton().multigrid_stats();
+  const NewtonSolver& newton = loop->newton();
+  sum_.multigrid = newton.multigrid_stats();
+  sum_.multigrid_gathered = {newton.multigrid_build_bytes(), newton.multigrid_cycle_bytes(),
+                             newton.multigrid_builds_bytes(), newton.multigrid_cycles_bytes(),
+                             newton.multigrid_builds()};
   loop->release_solvers();  // stepping is over: the picture reuses their memory
   settle_for_output();
   sum_.penetration_written = max_penetration_written(cloth, model, tiling, dec_.owned, r);
@@ -244,7 +248,7 @@ void Simulation::write_report(double depth, const std::string& checksum) {
   solved.written = sum_.penetration_written;
   solved.projections = sum_.counters.projections;
   progress_->finish(sum_.at_rest, depth, sum_.zigzag.share(), solved);
-  print_timing_table(tm_, wall, cpu, checksum, sum_.decomp, ranks_, sum_.peak_rss);
+  print_timing_table(tm_, wall, cpu, checksum, sum_.decomp, ranks_, sum_.peak_rss, sum_.multigrid_gathered);
   print_table2(sum_.table2, threads_);
 }
 

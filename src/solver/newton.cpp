@@ -38,6 +38,11 @@ void NewtonSolver::memory(MemoryTable& t) const {
         (d_.capacity() + r_.capacity() + s_.capacity() + p_.capacity() + kpc_.capacity() + dc_.capacity()) *
             sizeof(double));
   t.add(o, "ids", ids_);
+  // Whole-level arrays, held only by the multigrid on several ranks: every
+  // rank's rows of K, the V-cycle's right-hand side and result, the maps.
+  t.add(o, "gathered K, right-hand side and result (multigrid, several ranks)",
+        kg_.start.capacity() * sizeof(int64_t) + kg_.col.capacity() * sizeof(int32_t) +
+            (kg_.val.capacity() + rg_.capacity() + xg_.capacity()) * sizeof(double) + ranks_.memory());
 }
 
 // The compact vectors' row r and the evaluator's own numbering's index r
@@ -93,6 +98,7 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
   }
   ev.assemble_stiffness(k_, &ranks_.column_of(), ranks_.size(), stamp);
   ranks_.gather_matrix(red, k_, kg_);
+  mg_builds_bytes_ += ranks_.matrix_bytes();
   mg_.setup(kg_, ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
 }
 
@@ -102,6 +108,7 @@ void NewtonSolver::precondition(const double* r, double* s) {
     return;
   }
   ranks_.gather(dots_.reducer(), r, rg_.data());
+  mg_cycles_bytes_ += ranks_.vector_bytes();
   mg_.apply(rg_.data(), xg_.data());
   ranks_.take_mine(xg_.data(), s);
 }

@@ -29,9 +29,12 @@ class NewtonSolver {
   CgResult minimize(Evaluator& ev, double* z, const CgSettings& s, Timers& timers,
                     const std::function<void(int, double)>& on_iteration = {});
 
-  // Several ranks' V-cycle: bytes gathered into each rank per cycle and per build (0 on one rank).
+  // Several ranks' V-cycle: bytes gathered into each rank per cycle and per
+  // (the last) build, and over this process's builds and cycles so far (0 on one rank).
   int64_t multigrid_cycle_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.vector_bytes() : 0; }
   int64_t multigrid_build_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.matrix_bytes() : 0; }
+  int64_t multigrid_builds_bytes() const { return mg_builds_bytes_; }
+  int64_t multigrid_cycles_bytes() const { return mg_cycles_bytes_; }
   // The multigrid's levels (empty with Jacobi).
   const std::vector<MultigridLevelStats>& multigrid_stats() const { return mg_.stats(); }
   Preconditioner preconditioner() const { return pc_; }
@@ -95,6 +98,7 @@ class NewtonSolver {
   // Solves on the current build, and the first's and last's iterations.
   int mg_solves_ = 0, mg_first_ = 0, mg_last_ = 0;
   int64_t mg_builds_ = 0;  // hierarchies built so far
+  int64_t mg_builds_bytes_ = 0, mg_cycles_bytes_ = 0;  // gathered into this rank so far (several ranks)
 };
 
 }  // namespace drape

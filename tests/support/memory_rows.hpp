@@ -26,13 +26,32 @@ inline bool follows_the_grid(const MemoryTable::Row& r) {
   return false;
 }
 
+// The finest level's arrays gathered whole into every rank: allowed only
+// with the multigrid on several ranks (0 on one rank and with Jacobi:
+// test_memory, test_mpi_memory_np2 check it).
+inline const char* const kGatheredLevel =
+    "NewtonSolver: gathered K, right-hand side and result (multigrid, several ranks)";
+
+inline size_t row_bytes(const MemoryTable& t, const std::string& key) {
+  size_t bytes = 0;
+  for (const MemoryTable::Row& r : t.rows)
+    if (r.owner + ": " + r.array == key) bytes += r.bytes;
+  return bytes;
+}
+
+inline bool listed(const MemoryTable& t, const std::string& key) {
+  for (const MemoryTable::Row& r : t.rows)
+    if (r.owner + ": " + r.array == key) return true;
+  return false;
+}
+
 // The time loop's rows (evaluator, solvers, saved unknowns) but those.
 inline std::map<std::string, size_t> list_sized_rows(const TimeLoop& loop) {
   MemoryTable t;
   loop.memory(t);
   std::map<std::string, size_t> rows;
   for (const MemoryTable::Row& r : t.rows)
-    if (!follows_the_grid(r)) rows[r.owner + ": " + r.array] += r.bytes;
+    if (!follows_the_grid(r) && r.owner + ": " + r.array != kGatheredLevel) rows[r.owner + ": " + r.array] += r.bytes;
   return rows;
 }
 
