@@ -146,7 +146,9 @@ void Evaluator::memory(MemoryTable& t) const {
   t.add(o, "bending axes", axis_t_);
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
-  t.add(o, "hanging particles' forces and results", sum({&hres_, &hpend_}));
+  t.add(o, "hanging particles' forces and results",
+        sum({&hres_, &hpend_}) + (hslot_.capacity() + row_hslot_.capacity()) * sizeof(int32_t) +
+            hsort_.capacity() * sizeof(hsort_[0]));
   t.add(o, "assembly maps",
         (asm_index_.capacity() + asm_hang_.capacity()) * sizeof(int32_t) +
             (hx_start_.capacity() + ht_start_.capacity()) * sizeof(int64_t) +
@@ -163,6 +165,11 @@ void Evaluator::memory(MemoryTable& t) const {
 // grid on every rank.
 int64_t Evaluator::particle_entry(int64_t p) const {
   if (!compact_) return 3 * p;
+  const int64_t pos = list_position(p);
+  return pos >= 0 ? 3 * pos : -1;
+}
+
+int64_t Evaluator::list_position(int64_t p) const {
   const std::vector<int>& tiles = lists_.tiles;
   const auto k = std::lower_bound(tiles.begin(), tiles.end(), tiling_.tile_of(p));
   if (k == tiles.end() || *k != tiling_.tile_of(p)) return -1;
@@ -170,7 +177,7 @@ int64_t Evaluator::particle_entry(int64_t p) const {
   const size_t kt = size_t(k - tiles.begin());
   const int64_t *b = pl.items.data() + pl.tile_begin[kt], *e = pl.items.data() + pl.tile_begin[kt + 1];
   const int64_t* f = std::lower_bound(b, e, p);
-  return f != e && *f == p ? 3 * (f - pl.items.data()) : -1;
+  return f != e && *f == p ? f - pl.items.data() : -1;
 }
 
 int64_t Evaluator::position_of(int kind, int64_t s) const {
@@ -233,12 +240,7 @@ void Evaluator::build_rows() {
   rows_stamp_ = lists_.stamp;
   rows_hanging_ = lists_.hanging.size();
   fit_arrays(false);  // the lists' sizes, within the capacity unless they outgrew it
-  // The hanging particles' forces and results on the way to their ends, by
-  // grid index: sized once the lists have room for hanging particles (AMRC's
-  // first ones, or room reserved for them up front), so a uniform mesh never
-  // holds them. All zero between passes, as when sized.
-  if (lists_.hanging.capacity() > 0 && hres_.empty())
-    for (auto* v : {&hres_, &hpend_}) v->assign(3 * size_t(c_.grid.n()), 0.0);
+  number_hanging_slots();
   kg_ready_ = settled_ = false;  // kept in the old lists' order
   if (!std::is_sorted(lists_.tiles.begin(), lists_.tiles.end()))
     throw std::logic_error("Evaluator: the lists' tiles are not in ascending order");
@@ -697,7 +699,7 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
 double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho,
-                                    const InertiaTerms& it) {
+                                    const InertiaTerms& it, const double* passed) {
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
     return 0;
@@ -720,8 +722,8 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
     r[1] += v[1];
     r[2] += v[2];
   });
-  if (!lists_.hanging.empty())  // forces passed on by hanging particles (zero elsewhere)
-    for (int k = 0; k < 3; ++k) r[k] += hres_[3 * p + k];
+  if (passed)  // forces passed on by hanging particles (zero elsewhere)
+    for (int k = 0; k < 3; ++k) r[k] += passed[k];
   const double inv = it.inv_scale;
   for (int k = 0; k < 3; ++k) rho[k] = r[k] * inv;
   return 0.5 * (rho[0] * rho[0] + rho[1] * rho[1] + rho[2] * rho[2]);
@@ -896,7 +898,7 @@ CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
                           [&](const ItemRun& run) { shear_forces(run, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) {
                             double* rho = &rho_[3 * pos];
-                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it);
+                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it, passed_force(pos));
                             if (grid) std::copy(rho, rho + 3, &rho_grid_[3 * p]);
                           });
   clear_hanging(hres_);
@@ -1004,7 +1006,7 @@ CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
   auto cost_s = [&](const ItemRun& run) { shear_forces(run, z, nullptr); };
   auto residual = [&](int64_t p, int64_t pos) {
     double* rho = &rho_[3 * pos];
-    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it);
+    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it, passed_force(pos));
     std::copy(rho, rho + 3, &rho_grid_[3 * p]);
   };
   auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
@@ -1064,10 +1066,58 @@ void Evaluator::interpolate_hanging(double* x) const {
     for (int k = 0; k < 3; ++k) x[3 * g->h + k] = (1 - g->t) * x[3 * g->a + k] + g->t * x[3 * g->b + k];
 }
 
-void Evaluator::clear_hanging(std::vector<double>& a) {
-  for (const HangingLink& g : lists_.hanging)
-    for (int64_t p : {g.h, g.a, g.b})
-      for (int k = 0; k < 3; ++k) a[3 * p + k] = 0.0;
+void Evaluator::clear_hanging(std::vector<double>& a) { std::fill(a.begin(), a.end(), 0.0); }
+
+namespace {
+// v with exactly `room` entries' capacity (moved only when that changes) and
+// `need` entries.
+template <class T>
+void hold(std::vector<T>& v, size_t room, size_t need, const T& fill) {
+  if (v.capacity() != room) {
+    std::vector<T> fresh;
+    fresh.reserve(room);
+    v.swap(fresh);
+  }
+  v.resize(need, fill);
+}
+}  // namespace
+
+// Slots, not grid indices: the buffers follow the hanging links. A particle
+// that is one link's h and another's end (forces move on up) or two links'
+// end holds one slot; sorting the links' particles by id finds them.
+void Evaluator::number_hanging_slots() {
+  const std::vector<HangingLink>& hl = lists_.hanging;
+  if (hl.capacity() == 0) return;  // a uniform mesh holds none of it
+  // Held at the room the lists hold (hanging links, rows), so they move only
+  // when the lists' own arrays do: never while stepping.
+  const size_t nh = hl.size(), cap = hl.capacity(), np = size_t(lists_.particles.size());
+  hold(hslot_, 3 * cap, 3 * nh, int32_t(-1));
+  hold(hsort_, 3 * cap, 3 * nh, std::pair<int64_t, int32_t>{});
+  hold(row_hslot_, rows_.capacity(), np, int32_t(-1));
+  std::fill(row_hslot_.begin(), row_hslot_.end(), int32_t(-1));
+  for (size_t i = 0; i < nh; ++i) {
+    const HangingLink& g = hl[i];
+    hsort_[3 * i] = {g.h, int32_t(3 * i)};
+    hsort_[3 * i + 1] = {g.a, int32_t(3 * i + 1)};
+    hsort_[3 * i + 2] = {g.b, int32_t(3 * i + 2)};
+  }
+  std::sort(hsort_.begin(), hsort_.end());
+  int32_t next = int32_t(nh);  // the ends that do not hang, after the hanging ones
+  for (size_t b = 0, e; b < hsort_.size(); b = e) {
+    int32_t slot = -1;
+    for (e = b; e < hsort_.size() && hsort_[e].first == hsort_[b].first; ++e)
+      if (slot < 0 && hsort_[e].second % 3 == 0) slot = hsort_[e].second / 3;  // h of that link
+    if (slot < 0) slot = next++;
+    for (size_t k = b; k < e; ++k) hslot_[size_t(hsort_[k].second)] = slot;
+    const int64_t pos = list_position(hsort_[b].first);
+    if (pos >= 0) row_hslot_[size_t(pos)] = slot;
+  }
+  // All zero between passes, as when sized.
+  const size_t slots = std::min(3 * cap, size_t(c_.grid.n()));  // 3 a link, and never more than the grid's
+  for (auto* v : {&hres_, &hpend_}) {
+    hold(*v, 3 * slots, 3 * size_t(next), 0.0);
+    std::fill(v->begin(), v->end(), 0.0);
+  }
 }
 
 // The force on a hanging particle (its elements' and the contact's; it has
@@ -1076,18 +1126,19 @@ void Evaluator::hanging_forces(const double* z) {
   clear_hanging(hres_);
   for (size_t i = 0; i < lists_.hanging.size(); ++i) {  // finest first: forces move on up
     const HangingLink& g = lists_.hanging[i];
+    const size_t sh = 3 * size_t(hslot_[3 * i]), sa = 3 * size_t(hslot_[3 * i + 1]), sb = 3 * size_t(hslot_[3 * i + 2]);
     double f[3], fc[3];
     contact_force(m_.contact, z + 3 * g.h, fc);
     friction_force(m_.contact, z + 3 * g.h, &c_.x1[3 * g.h], fc);
-    for (int k = 0; k < 3; ++k) f[k] = hres_[3 * g.h + k] - fc[k];
+    for (int k = 0; k < 3; ++k) f[k] = hres_[sh + k] - fc[k];
     gather_listed(hanging_row(i), [&](const double* v) {
       f[0] += v[0];
       f[1] += v[1];
       f[2] += v[2];
     });
     for (int k = 0; k < 3; ++k) {
-      hres_[3 * g.a + k] += (1 - g.t) * f[k];
-      hres_[3 * g.b + k] += g.t * f[k];
+      hres_[sa + k] += (1 - g.t) * f[k];
+      hres_[sb + k] += g.t * f[k];
     }
   }
 }
@@ -1235,7 +1286,7 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
       double rho[3];  // scratch: the window's own
-      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho, inertia_terms());
+      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho, inertia_terms(), passed_force(list_position(p)));
       for (int d = 0; d < 2; ++d) {
         if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
         if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];

@@ -298,7 +298,15 @@ class Evaluator {
     return {m_.accel_coeff(), m_.dt / m_.dt_prev, m_.drag / m_.dt, 1.0 / m_.force_scale, m_.inertia_coeff()};
   }
   // Particle p's scaled residual into rho (3); returns its Newton cost.
-  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho, const InertiaTerms& it);
+  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho, const InertiaTerms& it,
+                           const double* passed);
+  // The force hanging particles pass on to the particle at list position
+  // pos (zeros where none; nullptr without hanging links).
+  const double* passed_force(int64_t pos) const {
+    static const double none[3] = {0, 0, 0};
+    if (lists_.hanging.empty()) return nullptr;
+    return pos >= 0 && row_hslot_[size_t(pos)] >= 0 ? &hres_[3 * size_t(row_hslot_[pos])] : none;
+  }
   void edge_gradient(int64_t s, int64_t pos, const double* z, double* grad);
   void edge_gradient(const ItemRun& run, const double* z, double* grad);
   void edge_gradient_out(int64_t s, int64_t pos, const V3<double>& ra, const V3<double>& rb, const V3<double> g[2],
@@ -333,6 +341,7 @@ class Evaluator {
   // A free particle's first entry: its position in z, or 3 x its place in
   // the particle list (-1 where it is not this rank's: a ghost).
   int64_t particle_entry(int64_t p) const;
+  int64_t list_position(int64_t p) const;  // p's in lists_.particles (-1: not listed)
   int64_t particle_entry(int64_t p, int64_t pos) const { return compact_ ? 3 * pos : 3 * p; }
   // Element passes: this rank's elements, then the ghost ring's (split in
   // chunks as active lists whatever the schedule: the ring has no tiles).
@@ -417,6 +426,10 @@ class Evaluator {
   // their ends.
   void hanging_forces(const double* z);
   void hanging_residuals();
+  // Each link's h, a and b their slots in hres_ and hpend_ (the hanging
+  // particles' first, by link; the other ends after), and each particle
+  // row's slot (-1: none). At list changes only.
+  void number_hanging_slots();
   void hanging_gradient(const double* z, double* grad);
   template <class Own>
   void hanging_into_ends(double* out, Own&& own, double power, double fill);
@@ -589,7 +602,9 @@ class Evaluator {
   uint64_t pairs_numbered_ = 0;  // the pair list (SelfContact::builds) whose partners number_pairs kept
   int64_t pairs_missing_ = 0;    // its partners the numbering lacks (a product then refuses)
   size_t local_hanging_ = 0;
-  std::vector<double> hres_, hpend_;              // hanging particles' forces and results on the way to their ends
+  std::vector<double> hres_, hpend_;              // hanging links' forces and results on the way to their ends, 3 a slot
+  std::vector<int32_t> hslot_, row_hslot_;         // slots: 3 a hanging link; one a particle row
+  std::vector<std::pair<int64_t, int32_t>> hsort_;  // the links' particles by id, numbering the slots
   std::vector<double> partials_;                  // 4 rows x owned tiles
   std::vector<double> zwork_;                     // numeric gradient's perturbed copy
   // Self-contact's pairs, made to hold at z by every entry point that
@@ -696,23 +711,26 @@ inline void Evaluator::hanging_into_ends(double* out, Own&& own, double power, d
   clear_hanging(hpend_);
   for (size_t i = 0; i < lists_.hanging.size(); ++i) {
     const HangingLink& g = lists_.hanging[i];
+    const int64_t sh = 3 * int64_t(hslot_[3 * i]), sa = 3 * int64_t(hslot_[3 * i + 1]),
+                  sb = 3 * int64_t(hslot_[3 * i + 2]);
     double v[3];
     own(g.h, hanging_row(i), v);
     // pow only for the diagonals: a product's weights are the plain ones.
     const double wa = power == 1.0 ? 1 - g.t : std::pow(1 - g.t, power);
     const double wb = power == 1.0 ? g.t : std::pow(g.t, power);
     for (int k = 0; k < 3; ++k) {
-      v[k] += hpend_[3 * g.h + k];
-      hpend_[3 * g.a + k] += wa * v[k];
-      hpend_[3 * g.b + k] += wb * v[k];
+      v[k] += hpend_[sh + k];
+      hpend_[sa + k] += wa * v[k];
+      hpend_[sb + k] += wb * v[k];
     }
   }
-  for (const HangingLink& g : lists_.hanging)
-    for (int64_t e : {g.a, g.b}) {
+  for (size_t i = 0; i < lists_.hanging.size(); ++i)
+    for (int end = 1; end < 3; ++end) {
+      const int64_t e = end == 1 ? lists_.hanging[i].a : lists_.hanging[i].b, s = 3 * int64_t(hslot_[3 * i + end]);
       const int64_t o = c_.free(e) ? particle_entry(e) : -1;
       for (int k = 0; k < 3; ++k) {
-        if (o >= 0) out[o + k] += hpend_[3 * e + k];
-        hpend_[3 * e + k] = 0.0;  // applied once
+        if (o >= 0) out[o + k] += hpend_[s + k];
+        hpend_[s + k] = 0.0;  // applied once
       }
     }
   if (compact_) return;  // a hanging particle has no entry there

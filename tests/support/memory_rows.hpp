@@ -1,6 +1,6 @@
 #pragma once
 // The solvers' arrays that still follow the grid, by name: what only a
-// gradient at z's indices, AMRC's hanging particles' forces or K's
+// gradient at z's indices or K's
 // assembly hold. Newton's product vectors (own numbering) and the
 // nonlinear CG's (compact) are checked like the rest. Every other array of the evaluator's, Newton's and the
 // time loop's tables holds this rank's listed elements, rows or unknowns
@@ -16,7 +16,6 @@ namespace drape::test {
 inline bool follows_the_grid(const MemoryTable::Row& r) {
   static const char* const named[] = {
       "Evaluator: residual at z's positions (gradients only)",
-      "Evaluator: hanging particles' forces and results",
       "Evaluator: assembly maps",
       "Evaluator: numeric gradient's copy of z",
   };
