@@ -488,6 +488,85 @@ TEST(AmrcMesh, SheetsFacingEachOtherSplitToTheFinestLevel) {
   }
 }
 
+// The near mask against the plain loop over every pair of active particles
+// with the same pair test (near.cpp's reach rule), entry by entry: a 65 x 65
+// cloth folded twice into three layers whose gap widens along j, jittered,
+// on uniform leaves of each level, so that every level's bits are set at
+// some particles and clear at others.
+unsigned near_mask_by_pairs(const Cloth& c, const Quadtree& t, double pair, int64_t p) {
+  const Grid& g = c.grid;
+  if (!c.active(p)) return 0;
+  const double diag = std::hypot(g.hi, g.hj), wide = std::max(g.hi, g.hj);
+  auto split = [&](int l) { return pair + std::ldexp(1.5 * diag + wide, l); };
+  const int ip = g.i_of(p), jp = g.j_of(p);
+  int coarsest = 0;
+  for (int ci = std::max(ip - 1, 0); ci <= std::min(ip, t.ni() - 2); ++ci)
+    for (int cj = std::max(jp - 1, 0); cj <= std::min(jp, t.nj() - 2); ++cj)
+      coarsest = std::max(coarsest, t.leaf_at(ci, cj).level);
+  const int levels = std::min(t.max_level(), coarsest + 1);
+  const double* xp = c.x() + 3 * p;
+  unsigned mask = 0;
+  for (int64_t q = 0; q < g.n(); ++q) {
+    if (!c.active(q)) continue;
+    const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
+    const double rest2 = di * di + dj * dj;
+    const double* xq = c.x() + 3 * q;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (xq[k] - xp[k]) * (xq[k] - xp[k]);
+    for (int l = 1; l <= levels; ++l) {
+      const double keep = 1.5 * split(l);
+      if (rest2 <= keep * keep) continue;  // the same sheet at this level's reach
+      if (d2 < split(l) * split(l)) mask |= 1u << l;
+      if (d2 < keep * keep) mask |= 1u << (kKeepFine + l);
+    }
+  }
+  return mask;
+}
+
+TEST(AmrcNear, MaskMatchesTheLoopOverEveryPair) {
+  constexpr int n = 65, layer = 22;
+  constexpr double h = 0.01;
+  Simulation w(flat_scene(n, n, (n - 1) * h, (n - 1) * h), test_fabric());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.3 * h, 0.3 * h);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const int lay = std::min(i / layer, 2), u = i - lay * layer;
+      const double gap = (1.0 + 12.0 * j / (n - 1)) * h;
+      const double y[3] = {(lay % 2 ? layer - u : u) * h + jitter(rng), j * h + jitter(rng),
+                           lay * gap + jitter(rng)};
+      for (int k = 0; k < 3; ++k) {
+        const int64_t v = 3 * (int64_t(i) * n + j) + k;
+        w.cloth.z[v] = w.cloth.x1[v] = w.cloth.x2[v] = y[k];
+      }
+    }
+  const double pair = 0.5 * h;
+  for (int level = 0; level <= 3; ++level) {
+    Amrc amrc(w.cloth, 3);
+    amrc.restore(std::vector<uint8_t>(size_t(n - 1) * (n - 1), uint8_t(level)));
+    amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
+    std::vector<double> mask(w.cloth.grid.n(), -1.0);
+    amrc.near_sheets(w.cloth, pair, {}, mask);
+    std::array<int, 2 * kKeepFine> set{};
+    int active = 0;
+    for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
+      const unsigned want = near_mask_by_pairs(w.cloth, amrc.tree(), pair, p);
+      if (w.cloth.active(p)) {
+        ASSERT_EQ(unsigned(mask[p]), want) << "level " << level << ", particle " << p;
+        ++active;
+      }
+      for (int b = 0; b < 2 * int(kKeepFine); ++b) set[b] += (want >> b) & 1;
+    }
+    // Every level the mask holds has its bits set at some particles, clear
+    // at others (but level 3's keep reach, 38 h, spans the folded cloth).
+    for (int l = 1; l <= std::min(3, level + 1); ++l)
+      for (int b : {l, int(kKeepFine) + l}) {
+        EXPECT_GT(set[b], 0) << "level " << level << ", bit " << b;
+        if (b != int(kKeepFine) + 3) EXPECT_LT(set[b], active) << "level " << level << ", bit " << b;
+      }
+  }
+}
+
 // A cloth draped over a box's edge (grid line i = 3) on level-1 leaves: the
 // leaf [2, 4] spans the edge, so its middle particles lie on a chord cutting
 // through the box. Refining the leaf next to one of them makes it hang on the

@@ -52,8 +52,8 @@ void Amrc::memory(MemoryTable& t) const {
   t.add("Amrc", "trees' levels", cap(tree_.levels()) + cap(old_.levels()));
   t.add("Amrc", "criterion fields (indicator, speed, inside, near)",
         cap(indicator_) + cap(speed_) + cap(inside_) + cap(near_));
-  t.add("Amrc", "near sheets' packed particles and hash",
-        cap(packed_ids_) + cap(packed_at_) + cap(bucket_start_) + cap(bucket_items_) + cap(packed_x_));
+  t.add("Amrc", "near sheets' packed particles and tile boxes",
+        cap(packed_ids_) + cap(packed_at_) + cap(packed_x_) + cap(tile_box_) + cap(tile_offset_));
   t.add("Amrc", "leaves (adapt's scratch)", cells_);
   t.add("Amrc", "the old mesh's marks",
         cap(was_active_) + cap(was_free_) + cap(edge_on_) + cap(triple_on_) + cap(shear_on_));
@@ -68,10 +68,14 @@ Amrc::Amrc(const Cloth& c, int max_level)
   packed_ids_.assign(c.grid.n(), 0);
   packed_at_.assign(c.grid.n(), -1);
   packed_x_.assign(3 * c.grid.n(), 0.0);
-  int64_t buckets = 1;
-  while (buckets < 2 * c.grid.n()) buckets *= 2;
-  bucket_start_.assign(buckets + 1, 0);
-  bucket_items_.assign(c.grid.n(), 0);
+  // Tiles of 2^k x 2^k particles, k = 1 up to where at most 4 x 4 remain.
+  tile_offset_.assign(2, 0);
+  for (int k = 1;; ++k) {
+    const int64_t di = (c.grid.ni + (1 << k) - 1) >> k, dj = (c.grid.nj + (1 << k) - 1) >> k;
+    tile_offset_.push_back(tile_offset_.back() + di * dj);
+    if (di <= 4 && dj <= 4) break;
+  }
+  tile_box_.assign(6 * tile_offset_.back(), 0.0);
   cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
   was_active_.assign(c.grid.n(), 0);
   was_free_.assign(c.grid.n(), 0);

@@ -88,9 +88,11 @@ class Amrc {
   Quadtree tree_, old_;
   std::vector<double> indicator_, speed_, inside_, near_;
   // near_sheets's: the active particles (ids, positions) packed in id order,
-  // each particle's packed index (-1: inactive), and their spatial hash.
-  std::vector<int32_t> packed_ids_, packed_at_, bucket_start_, bucket_items_;
-  std::vector<double> packed_x_;
+  // each particle's packed index (-1: inactive), and the boxes of a pyramid
+  // of grid tiles (from tile_offset_[k] at level k; near.cpp).
+  std::vector<int32_t> packed_ids_, packed_at_;
+  std::vector<double> packed_x_, tile_box_;
+  std::vector<int64_t> tile_offset_;
   std::vector<Cell> cells_;  // adapt's scratch, reserved for every leaf
   std::vector<uint8_t> was_active_, was_free_, edge_on_, triple_on_, shear_on_;  // the old mesh's
 };

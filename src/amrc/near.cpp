@@ -41,17 +41,81 @@ int coarsest_leaf(const Quadtree& t, int i, int j) {
   return top;
 }
 
-struct HashGrid {
-  double cell;
-  int64_t buckets;
-  void cell_of(const double* x, int64_t c[3]) const {
-    for (int k = 0; k < 3; ++k) c[k] = int64_t(std::floor(x[k] / cell));
+// A tile of the grid, 2^k x 2^k particles at pyramid level k, holds the
+// bounding box of its active particles' positions (empty: lo > hi).
+struct TileBox {
+  const double* box;  // lo[3], hi[3]
+  int i0, i1, j0, j1;  // the tile's grid range, clipped
+};
+
+// Lower bound on the squared distance from x to any point of the box, in
+// the arithmetic of the pair test, so that it never exceeds a pair's d2.
+double box_distance2(const double* box, const double* x) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double below = box[k] - x[k], above = x[k] - box[3 + k];
+    const double d = below > 0 ? below : (above > 0 ? above : 0.0);
+    d2 += d * d;
   }
-  int64_t bucket(int64_t cx, int64_t cy, int64_t cz) const {
-    const uint64_t h = uint64_t(cx) * 73856093u ^ uint64_t(cy) * 19349663u ^ uint64_t(cz) * 83492791u;
-    return int64_t(h & uint64_t(buckets - 1));
+  return d2;
+}
+
+// Upper bound on the squared rest distance from (ip, jp) to the tile.
+double rest_reach2(const TileBox& t, int ip, int jp, double hi, double hj) {
+  const double di = std::max(std::abs(t.i0 - ip), std::abs(t.i1 - 1 - ip)) * hi;
+  const double dj = std::max(std::abs(t.j0 - jp), std::abs(t.j1 - 1 - jp)) * hj;
+  return di * di + dj * dj;
+}
+
+// A tile may hold a counted pair only if, at some level l, part of it lies
+// nearer than keep(l) in space while part of it lies farther than keep(l)
+// at rest (the pair test counts d2 < keep(l)^2 < rest2 only).
+bool may_count(double dmin2, double rmax2, const double* keep2, int levels) {
+  for (int l = 1; l <= levels; ++l)
+    if (dmin2 < keep2[l] && rmax2 > keep2[l]) return true;
+  return false;
+}
+
+// The tiles' boxes, level 1 (2 x 2 particles) up to a top level of at most
+// 4 x 4 tiles, each level's tiles row-major from offset[k].
+struct Pyramid {
+  double* box;
+  const int64_t* offset;
+  int levels, ni, nj;
+  int dim_i(int k) const { return (ni + (1 << k) - 1) >> k; }
+  int dim_j(int k) const { return (nj + (1 << k) - 1) >> k; }
+  double* at(int k, int ti, int tj) const { return box + 6 * (offset[k] + int64_t(ti) * dim_j(k) + tj); }
+  TileBox tile(int k, int ti, int tj) const {
+    const int w = 1 << k;
+    return {at(k, ti, tj), ti * w, std::min((ti + 1) * w, ni), tj * w, std::min((tj + 1) * w, nj)};
+  }
+  void build(const Grid& g, const int32_t* packed_at, const double* xs) const {
+    for (int k = 1; k <= levels; ++k)
+      for (int ti = 0; ti < dim_i(k); ++ti)
+        for (int tj = 0; tj < dim_j(k); ++tj) {
+          double* b = at(k, ti, tj);
+          for (int a = 0; a < 3; ++a) b[a] = HUGE_VAL, b[3 + a] = -HUGE_VAL;
+          if (k == 1) {
+            const TileBox t = tile(1, ti, tj);
+            for (int i = t.i0; i < t.i1; ++i)
+              for (int j = t.j0; j < t.j1; ++j)
+                if (packed_at[g.id(i, j)] >= 0) grow(b, xs + 3 * int64_t(packed_at[g.id(i, j)]));
+          } else {
+            for (int ci = 2 * ti; ci < std::min(2 * ti + 2, dim_i(k - 1)); ++ci)
+              for (int cj = 2 * tj; cj < std::min(2 * tj + 2, dim_j(k - 1)); ++cj) merge(b, at(k - 1, ci, cj));
+          }
+        }
+  }
+  static void grow(double* b, const double* x) {
+    for (int a = 0; a < 3; ++a) b[a] = std::min(b[a], x[a]), b[3 + a] = std::max(b[3 + a], x[a]);
+  }
+  static void merge(double* b, const double* c) {
+    for (int a = 0; a < 3; ++a) b[a] = std::min(b[a], c[a]), b[3 + a] = std::max(b[3 + a], c[3 + a]);
   }
 };
+
+// Depth-first holds at most the top level's tiles and three siblings a level.
+constexpr int kStackDepth = 16 + 3 * 32;
 
 }  // namespace
 
@@ -85,23 +149,11 @@ void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& s
     }
     share.reducer->max_each(xs, 3 * m);
   }
-  // Counting sort by bucket (serial: the same hash on any thread count).
-  HashGrid hash{reach.keep(1), 1};
-  while (hash.buckets < 2 * m) hash.buckets *= 2;
-  int32_t* start = bucket_start_.data();
-  std::fill(start, start + hash.buckets + 1, 0);
-  int64_t cell[3];
-  for (int64_t k = 0; k < m; ++k) {
-    hash.cell_of(xs + 3 * k, cell);
-    ++start[hash.bucket(cell[0], cell[1], cell[2]) + 1];
-  }
-  for (int64_t b = 1; b <= hash.buckets; ++b) start[b] += start[b - 1];
-  for (int64_t k = 0; k < m; ++k) {
-    hash.cell_of(xs + 3 * k, cell);
-    bucket_items_[start[hash.bucket(cell[0], cell[1], cell[2])]++] = int32_t(k);
-  }
-  for (int64_t b = hash.buckets; b > 0; --b) start[b] = start[b - 1];
-  start[0] = 0;
+  const Pyramid pyr{tile_box_.data(), tile_offset_.data(), int(tile_offset_.size()) - 2, g.ni, g.nj};
+  pyr.build(g, packed_at_.data(), xs);
+  double keep2[kKeepFine] = {0};
+  for (int l = 1; l <= top_level; ++l) keep2[l] = reach.keep(l) * reach.keep(l);
+  const double same2 = keep2[1];
   // The mask is an OR over candidates: the same in any order.
   per_particle(c, share, out, [&](int64_t p) {
     const int64_t kp = packed_at_[p];
@@ -110,35 +162,50 @@ void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& s
     const int levels = std::min(top_level, coarsest_leaf(tree_, ip, jp) + 1);
     if (levels == 0) return 0.0;
     const double* xp = xs + 3 * kp;
-    int64_t home[3];
-    hash.cell_of(xp, home);
-    const int64_t span = int64_t(std::ceil(reach.keep(levels) / hash.cell));
-    const double far2 = reach.keep(levels) * reach.keep(levels), same2 = reach.keep(1) * reach.keep(1);
+    const double far2 = keep2[levels];
     unsigned mask = 0;
-    for (int64_t a = -span; a <= span; ++a)
-      for (int64_t b = -span; b <= span; ++b)
-        for (int64_t e = -span; e <= span; ++e) {
-          const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
-          const int64_t bk = hash.bucket(cx, cy, cz);
-          // A particle of another cell in this bucket needs no skipping: the
-          // mask is an OR, and one outside the searched cells lies beyond far.
-          for (int32_t s = start[bk]; s < start[bk + 1]; ++s) {
-            const int64_t q = packed_ids_[bucket_items_[s]];
-            const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
-            const double rest2 = di * di + dj * dj;
-            if (rest2 <= same2) continue;  // the same sheet at every level's reach (p itself too)
-            const double* xq = xs + 3 * int64_t(bucket_items_[s]);
-            double d2 = 0;
-            for (int k = 0; k < 3; ++k) d2 += (xq[k] - xp[k]) * (xq[k] - xp[k]);
-            if (d2 >= far2) continue;
-            for (int l = 1; l <= levels; ++l) {
-              const double keep = reach.keep(l), split = reach.split(l);
-              if (rest2 <= keep * keep) break;  // the same sheet at this level's reach, and so at coarser ones'
-              if (d2 < split * split) mask |= 1u << l;
-              if (d2 < keep * keep) mask |= 1u << (kKeepFine + l);
-            }
+    auto pairs = [&](const TileBox& t) {
+      for (int i = t.i0; i < t.i1; ++i)
+        for (int j = t.j0; j < t.j1; ++j) {
+          const int64_t q = g.id(i, j), kq = packed_at_[q];
+          if (kq < 0) continue;
+          const double di = (i - ip) * g.hi, dj = (j - jp) * g.hj;
+          const double rest2 = di * di + dj * dj;
+          if (rest2 <= same2) continue;  // the same sheet at every level's reach (p itself too)
+          const double* xq = xs + 3 * kq;
+          double d2 = 0;
+          for (int k = 0; k < 3; ++k) d2 += (xq[k] - xp[k]) * (xq[k] - xp[k]);
+          if (d2 >= far2) continue;
+          for (int l = 1; l <= levels; ++l) {
+            if (rest2 <= keep2[l]) break;  // the same sheet at this level's reach, and so at coarser ones'
+            const double split = reach.split(l);
+            if (d2 < split * split) mask |= 1u << l;
+            if (d2 < keep2[l]) mask |= 1u << (kKeepFine + l);
           }
         }
+    };
+    // Depth first down the pyramid, past tiles that cannot hold a counted
+    // pair: most of the own sheet lies either nearer than a level's reach
+    // both at rest and now, or farther in both.
+    struct Visit {
+      int k, ti, tj;
+    };
+    Visit stack[kStackDepth];
+    int top = 0;
+    const int kt = pyr.levels;
+    for (int ti = 0; ti < pyr.dim_i(kt); ++ti)
+      for (int tj = 0; tj < pyr.dim_j(kt); ++tj) stack[top++] = {kt, ti, tj};
+    while (top > 0) {
+      const Visit v = stack[--top];
+      const TileBox t = pyr.tile(v.k, v.ti, v.tj);
+      if (!may_count(box_distance2(t.box, xp), rest_reach2(t, ip, jp, g.hi, g.hj), keep2, levels)) continue;
+      if (v.k == 1) {
+        pairs(t);
+        continue;
+      }
+      for (int ci = 2 * v.ti; ci < std::min(2 * v.ti + 2, pyr.dim_i(v.k - 1)); ++ci)
+        for (int cj = 2 * v.tj; cj < std::min(2 * v.tj + 2, pyr.dim_j(v.k - 1)); ++cj) stack[top++] = {v.k - 1, ci, cj};
+    }
     return double(mask);
   });
 }
