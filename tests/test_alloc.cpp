@@ -36,7 +36,7 @@ void expect_no_allocation(bool slope_line_search, bool band_active_set = false, 
   s.cloth.tile = 8;
   s.cloth.height = 0.42;
   Simulation w(s, test_fabric());
-  Amrc amrc(w.cloth, 2);
+  Amrc amrc(w.cloth, 2, self_contact);
   std::vector<int> all(w.tiling.count());
   for (int t = 0; t < w.tiling.count(); ++t) all[t] = t;
   w.lists.hanging.reserve(w.cloth.grid.n());

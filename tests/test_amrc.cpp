@@ -467,7 +467,7 @@ TEST(AmrcMesh, SheetsFacingEachOtherSplitToTheFinestLevel) {
   };
   for (bool near : {true, false}) {
     Simulation w(flat_scene(ni, nj, (ni - 1) * h, (nj - 1) * h), test_fabric());
-    Amrc amrc(w.cloth, 2);
+    Amrc amrc(w.cloth, 2, near);
     amrc.restore(std::vector<uint8_t>(size_t(ni - 1) * (nj - 1), 2));
     amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
     const double pair = 2 * w.model.contact.thickness;
@@ -542,7 +542,7 @@ TEST(AmrcNear, MaskMatchesTheLoopOverEveryPair) {
     }
   const double pair = 0.5 * h;
   for (int level = 0; level <= 3; ++level) {
-    Amrc amrc(w.cloth, 3);
+    Amrc amrc(w.cloth, 3, true);
     amrc.restore(std::vector<uint8_t>(size_t(n - 1) * (n - 1), uint8_t(level)));
     amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
     std::vector<double> mask(w.cloth.grid.n(), -1.0);
@@ -562,7 +562,9 @@ TEST(AmrcNear, MaskMatchesTheLoopOverEveryPair) {
     for (int l = 1; l <= std::min(3, level + 1); ++l)
       for (int b : {l, int(kKeepFine) + l}) {
         EXPECT_GT(set[b], 0) << "level " << level << ", bit " << b;
-        if (b != int(kKeepFine) + 3) EXPECT_LT(set[b], active) << "level " << level << ", bit " << b;
+        if (b != int(kKeepFine) + 3) {
+          EXPECT_LT(set[b], active) << "level " << level << ", bit " << b;
+        }
       }
   }
 }

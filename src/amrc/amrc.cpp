@@ -59,11 +59,21 @@ void Amrc::memory(MemoryTable& t) const {
         cap(was_active_) + cap(was_free_) + cap(edge_on_) + cap(triple_on_) + cap(shear_on_));
 }
 
-Amrc::Amrc(const Cloth& c, int max_level)
+Amrc::Amrc(const Cloth& c, int max_level, bool near)
     : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
   indicator_.assign(c.grid.n(), 0.0);
   speed_.assign(c.grid.n(), 0.0);
   inside_.assign(c.grid.n(), 0.0);
+  if (near) make_room_near(c);
+  cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
+  was_active_.assign(c.grid.n(), 0);
+  was_free_.assign(c.grid.n(), 0);
+  edge_on_ = c.edge_on;
+  triple_on_ = c.triple_on;
+  shear_on_ = c.shear_on;
+}
+
+void Amrc::make_room_near(const Cloth& c) {
   near_.assign(c.grid.n(), 0.0);
   packed_ids_.assign(c.grid.n(), 0);
   packed_at_.assign(c.grid.n(), -1);
@@ -76,14 +86,7 @@ Amrc::Amrc(const Cloth& c, int max_level)
     if (di <= 4 && dj <= 4) break;
   }
   tile_box_.assign(6 * tile_offset_.back(), 0.0);
-  cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
-  was_active_.assign(c.grid.n(), 0);
-  was_free_.assign(c.grid.n(), 0);
-  edge_on_ = c.edge_on;
-  triple_on_ = c.triple_on;
-  shear_on_ = c.shear_on;
 }
-
 
 void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
   const double* x = c.x();

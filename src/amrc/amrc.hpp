@@ -28,7 +28,9 @@ struct AdaptShare {
 
 class Amrc {
  public:
-  Amrc(const Cloth& c, int max_level);
+  // `near`: room for near_sheets (self-contact), 56 bytes a grid particle
+  // that a run without self-contact does not hold.
+  Amrc(const Cloth& c, int max_level, bool near = false);
 
   const Quadtree& tree() const { return tree_; }
   // A checkpoint's tree (its finest intervals' leaf levels).
@@ -84,6 +86,7 @@ class Amrc {
   // After tree_ changed from old_: the new mesh, with the state carried over.
   void carry_over(Cloth& c, double density, bool shear);
   void carry_shear(Cloth& c) const;
+  void make_room_near(const Cloth& c);
 
   Quadtree tree_, old_;
   std::vector<double> indicator_, speed_, inside_, near_;

@@ -19,6 +19,7 @@
 // them together turns the mesh lines, and the bending criterion splits it.
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "amrc/amrc.hpp"
 #include "amrc/per_particle.hpp"
@@ -122,6 +123,7 @@ constexpr int kStackDepth = 16 + 3 * 32;
 void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& share, std::vector<double>& out) {
   const Grid& g = c.grid;
   const int64_t n = g.n();
+  if (int64_t(packed_at_.size()) != n) throw std::logic_error("Amrc::near_sheets: built without `near` room");
   const int top_level = tree_.max_level();
   const NearReach reach{pair_distance, std::hypot(g.hi, g.hj), std::max(g.hi, g.hj)};
   // The active particles in id order, and their positions from their owners

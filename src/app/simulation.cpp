@@ -96,7 +96,8 @@ void Simulation::set_up_mesh() {
 
 void Simulation::set_up_tree(int start_level) {
   const CheckpointState* ck = opt_.restart;
-  amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level_);
+  amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level_,
+                                scene.solver.self_contact);
   if (ck && !ck->amrc_levels.empty()) {
     amrc->restore(ck->amrc_levels);
     if (sequence_level_ > 0) sequence_level_ = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];
@@ -134,7 +135,7 @@ void Simulation::rebuild() {
 }
 
 void Simulation::set_tree(const Quadtree& t) {
-  amrc = std::make_unique<Amrc>(cloth, t.max_level());
+  amrc = std::make_unique<Amrc>(cloth, t.max_level(), scene.solver.self_contact);
   amrc->restore(t.levels());
 }
 
