@@ -217,6 +217,26 @@ int pcg(const BlockMatrix& A, const std::vector<double>& b, const std::function<
   return 5000;
 }
 
+// PCG iterations with a two-grid cycle: the smoother, Q's Galerkin coarse
+// operator solved exactly, the smoother again; its blocks in coarse_blocks.
+int two_grid_iterations(const BlockMatrix& K, Chebyshev& smoother, const Prolongation& Q,
+                        const std::vector<double>& b, int64_t& coarse_blocks) {
+  BlockMatrix AP, Ac;
+  galerkin(K, Q, AP, Ac, true);
+  CoarseSolve solve;
+  solve.factor(Ac, true);
+  coarse_blocks = Ac.blocks();
+  std::vector<double> r(b.size()), bc(3 * size_t(Q.coarse())), xc(bc.size());
+  return pcg(K, b, [&](const double* rhs, double* x) {
+    smoother.smooth(K, rhs, x, true);
+    K.residual(rhs, x, r.data());
+    restrict_to(Q, r.data(), bc.data());
+    solve.solve(bc.data(), xc.data());
+    prolong_add(Q, xc.data(), x);
+    smoother.smooth(K, rhs, x, false);
+  });
+}
+
 // Two functions per coarse node (adaptive smoothed aggregation's way of
 // adding near-null vectors, Brezina et al. 2004), as a two-grid experiment
 // on the finest level: P = [P0 | T P0], T_f = the 3 x 3 block [t1 t2 t3] at
@@ -262,22 +282,11 @@ void two_functions(const BlockMatrix& K, const std::vector<int64_t>& ids, int n,
   smoother.setup(K, 1, 10);
   for (int rich = 0; rich < 2; ++rich) {
     const Prolongation& Q = rich ? P : P0;
-    BlockMatrix AP, Ac;
-    galerkin(K, Q, AP, Ac, true);
-    CoarseSolve solve;
-    solve.factor(Ac, true);
-    std::vector<double> r(static_cast<size_t>(m)), bc(3 * size_t(Q.coarse())), xc(bc.size());
-    const int its = pcg(K, b, [&](const double* rhs, double* x) {
-      smoother.smooth(K, rhs, x, true);
-      K.residual(rhs, x, r.data());
-      restrict_to(Q, r.data(), bc.data());
-      solve.solve(bc.data(), xc.data());
-      prolong_add(Q, xc.data(), x);
-      smoother.smooth(K, rhs, x, false);
-    });
+    int64_t coarse_blocks = 0;
+    const int its = two_grid_iterations(K, smoother, Q, b, coarse_blocks);
     std::printf("two-grid, P0%s: %d iterations (coarse: %lld nodes, %lld blocks)\n",
                 rich ? (" and " + std::to_string(3 * sets) + " V-cycle vectors per coarse point").c_str() : "", its,
-                (long long)Q.coarse(), (long long)Ac.blocks());
+                (long long)Q.coarse(), (long long)coarse_blocks);
   }
   std::printf("V-cycle, bilinear: %d iterations\n", pcg(K, b, [&](const double* rhs, double* x) { vc.apply(rhs, x); }));
 }
@@ -345,21 +354,10 @@ void two_grid_cubic(const BlockMatrix& K, const std::vector<int64_t>& ids, int n
   smoother.setup(K, 1, 10);
   for (int cubic = 0; cubic < 2; ++cubic) {
     const Prolongation& Q = cubic ? P3 : P0;
-    BlockMatrix AP, Ac;
-    galerkin(K, Q, AP, Ac, true);
-    CoarseSolve solve;
-    solve.factor(Ac, true);
-    std::vector<double> r(static_cast<size_t>(m)), bc(3 * size_t(Q.coarse())), xc(bc.size());
-    const int its = pcg(K, b, [&](const double* rhs, double* x) {
-      smoother.smooth(K, rhs, x, true);
-      K.residual(rhs, x, r.data());
-      restrict_to(Q, r.data(), bc.data());
-      solve.solve(bc.data(), xc.data());
-      prolong_add(Q, xc.data(), x);
-      smoother.smooth(K, rhs, x, false);
-    });
+    int64_t coarse_blocks = 0;
+    const int its = two_grid_iterations(K, smoother, Q, b, coarse_blocks);
     std::printf("two-grid, %s P: %d iterations (coarse blocks %lld)\n", cubic ? "cubic" : "bilinear", its,
-                (long long)Ac.blocks());
+                (long long)coarse_blocks);
   }
 }
 
