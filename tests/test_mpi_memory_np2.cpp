@@ -4,6 +4,7 @@
 #include <mpi.h>
 
 #include <cstdio>
+#include <memory>
 
 #include "decomp/decomposition.hpp"
 #include "solver/memory_table.hpp"
@@ -12,6 +13,26 @@
 
 namespace drape::test {
 namespace {
+
+// This rank's tiles of the scene on two ranks, and its time loop.
+struct RankRun {
+  Cloth cloth;
+  Model model;
+  Tiling tiling;
+  Decomposition dec;
+  ActiveLists lists;
+  LoopPolicy policy;
+  std::unique_ptr<TimeLoop> loop;
+  RankRun(const Scene& s, const Fabric& f)
+      : cloth(make_cloth(s, f)),
+        model(make_model(s, f, cloth.grid.hi, cloth.grid.hj)),
+        tiling(cloth.grid.ni, cloth.grid.nj, s.cloth.tile),
+        dec(decompose(cloth, tiling, MPI_COMM_WORLD, ghost_widths(false, 0))),
+        policy{s.parallel.schedule, s.parallel.chunk} {
+    build_active_lists(cloth, tiling, dec.owned, lists, dec.halo->ring());
+    loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, *dec.reducer, s.solver, dec.ghosts());
+  }
+};
 
 size_t evaluator_bytes(TimeLoop& loop) {
   MemoryTable t;
@@ -31,14 +52,8 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
   one.step();
   const size_t whole = evaluator_bytes(*one.loop);
 
-  Cloth cloth = make_cloth(s, f);
-  Model model = make_model(s, f, cloth.grid.hi, cloth.grid.hj);
-  const Tiling tiling(cloth.grid.ni, cloth.grid.nj, s.cloth.tile);
-  const Decomposition dec = decompose(cloth, tiling, MPI_COMM_WORLD, ghost_widths(false, 0));
-  ActiveLists lists;
-  build_active_lists(cloth, tiling, dec.owned, lists, dec.halo->ring());
-  const LoopPolicy policy{s.parallel.schedule, s.parallel.chunk};
-  TimeLoop loop(cloth, model, lists, tiling, policy, *dec.reducer, s.solver, dec.ghosts());
+  RankRun run(s, f);
+  TimeLoop& loop = *run.loop;
   Timers tm;
   loop.step(tm);
   const size_t mine = evaluator_bytes(loop);
@@ -76,14 +91,10 @@ TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
   s.solver.method = SolverMethod::Newton;
   s.solver.preconditioner = Preconditioner::Multigrid;
   const Fabric f = test_fabric();
-  Cloth cloth = make_cloth(s, f);
-  Model model = make_model(s, f, cloth.grid.hi, cloth.grid.hj);
-  const Tiling tiling(cloth.grid.ni, cloth.grid.nj, s.cloth.tile);
-  const Decomposition dec = decompose(cloth, tiling, MPI_COMM_WORLD, ghost_widths(false, 0));
-  ActiveLists lists;
-  build_active_lists(cloth, tiling, dec.owned, lists, dec.halo->ring());
-  const LoopPolicy policy{s.parallel.schedule, s.parallel.chunk};
-  TimeLoop loop(cloth, model, lists, tiling, policy, *dec.reducer, s.solver, dec.ghosts());
+  RankRun run(s, f);
+  Cloth& cloth = run.cloth;
+  const ActiveLists& lists = run.lists;
+  TimeLoop& loop = *run.loop;
   Timers tm;
   for (int k = 0; k < 6; ++k) loop.step(tm);
   const NewtonSolver& newton = loop.newton();
