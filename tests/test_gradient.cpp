@@ -560,6 +560,68 @@ TEST(BandLanes, StopAndExcessAreTheScalarBandsBitForBit) {
   EXPECT_GT(outside, 10000);
   EXPECT_GT(inside, 10000);
 }
+
+// Four tensile power-law bands in the lanes (tensile_band4, two directions'
+// numbers mixed across the lanes) against Band::at: compression's line and
+// onset, the power law, past EMT, their boundaries and a NaN, bit for bit.
+TEST(BandLanes, TensileBandsAreBandAtBitForBit) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  TensileKES warp, weft;
+  weft.emt = 0.03, weft.lt = 0.55, weft.rt = 0.4, weft.fm = 300;
+  const Band bands[2] = {Band::tensile(warp, 0.5), Band::tensile(weft, 2.0)};
+  const Band::PowerLaw law[2] = {bands[0].power_law_terms(), bands[1].power_law_terms()};
+  ASSERT_TRUE(bands[0].power_law() && bands[1].power_law());
+  int branch[3] = {0, 0, 0};  // compression, power law, past EMT
+  for (int sample = 0; sample < 20000; ++sample) {
+    double q[4];
+    const Band::PowerLaw* p[4];
+    int d[4];
+    for (int l = 0; l < 4; ++l) {
+      d[l] = int((sample >> l) & 1);
+      const double emt = law[d[l]].emt;
+      const int kind = (sample + 3 * l) % 11;
+      // Exactly on a branch's boundary (0, EMT, -eps), a NaN, or anywhere in [-2 EMT, 2 EMT].
+      q[l] = kind == 0 ? 0.0 : kind == 1 ? emt : kind == 2 ? -Band::kCompressionOnset * emt
+             : kind == 3 && sample % 13 == 0 ? std::nan("") : 2 * emt * u(rng);
+      p[l] = &law[d[l]];
+      branch[q[l] <= 0 ? 0 : q[l] < emt ? 1 : 2] += q[l] == q[l];
+    }
+    const BandFour v4 = tensile_band4(D4{q[0], q[1], q[2], q[3]}, p);
+    for (int l = 0; l < 4; ++l) {
+      const BandValue v = bands[d[l]].at(q[l]);
+      ASSERT_TRUE(same(v4.lo[l], v.lo) && same(v4.hi[l], v.hi) && same(v4.dlo[l], v.dlo) && same(v4.dhi[l], v.dhi))
+          << "sample " << sample << " lane " << l << " q " << q[l];
+    }
+  }
+  for (int b : branch) EXPECT_GT(b, 10000);
+}
+
+// Four linear bands in the lanes (linear_band4, two bands' numbers mixed)
+// against Band::at, bit for bit.
+TEST(BandLanes, LinearBandsAreBandAtBitForBit) {
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  const Band bands[2] = {Band::linear(2e-5, 7e-4), Band::linear(3.3e-5, 1.1e-4)};
+  ASSERT_TRUE(bands[0].plain_linear() && bands[1].plain_linear());
+  ASSERT_FALSE(Band::tensile(TensileKES{}).plain_linear());
+  for (int sample = 0; sample < 5000; ++sample) {
+    double q[4];
+    int d[4];
+    for (int l = 0; l < 4; ++l) d[l] = int((sample >> l) & 1), q[l] = 40 * u(rng);
+    const BandFour v4 = linear_band4(D4{q[0], q[1], q[2], q[3]},
+                                     D4{bands[d[0]].slope(), bands[d[1]].slope(), bands[d[2]].slope(), bands[d[3]].slope()},
+                                     D4{bands[d[0]].half_width(), bands[d[1]].half_width(), bands[d[2]].half_width(),
+                                        bands[d[3]].half_width()});
+    for (int l = 0; l < 4; ++l) {
+      const BandValue v = bands[d[l]].at(q[l]);
+      ASSERT_TRUE(same(v4.lo[l], v.lo) && same(v4.hi[l], v.hi) && same(v4.dlo[l], v.dlo) && same(v4.dhi[l], v.dhi))
+          << "sample " << sample << " lane " << l;
+    }
+  }
+}
 #endif
 
 // A run-taking loop body (ItemRun) sees every item once, in fours and then

@@ -70,6 +70,20 @@ class Band {
     if (reversal_ > 0 && (f == v.hi || f == v.lo)) return {f, f == v.hi ? v.dhi : v.dlo};
     return {f, reversal_ * v.dhi};
   }
+  // The tensile power law's numbers (Kind::PowerLaw, which only tensile()
+  // makes), for four edges' bands in the lanes of a vector
+  // (elements/band_K.hpp: tensile_band4, the same arithmetic as curve_at).
+  struct PowerLaw {
+    double fm, n_load, n_unload, emt, kc;
+  };
+  bool power_law() const { return kind_ == Kind::PowerLaw; }
+  // A linear band's slope and half width (linear() without curves: at()'s
+  // inline case), for the lanes' form likewise (linear_band4).
+  bool plain_linear() const { return kind_ == Kind::Linear && !tensile_; }
+  double slope() const { return slope_; }
+  double half_width() const { return half_; }
+  PowerLaw power_law_terms() const { return {fm_, n_load_, n_unload_, emt_, kc_}; }
+
   BandExcess excess(double f, double q) const { return excess(f, at(q)); }
   static BandExcess excess(double f, const BandValue& v) {
     if (f > v.hi) return {f - v.hi, -v.dhi};

@@ -38,6 +38,37 @@ void band_costs4(const BandFour& b, const StopFour& st, D4 f, D4 lam, bool use, 
   storeu4(gq, div ? slope / *div : slope);
   storeu4(gf, (sigma + mu * mem) * lam);
 }
+
+// Four edges' stretch bands at their strains q (edge l's band by its
+// direction, s[l] & 1): both directions' power laws in the lanes, any other
+// band (measured curves) by Band::at lane by lane.
+BandFour stretch_four(const Band stretch[2], const int64_t s[4], D4 q) {
+  const Band* b[2] = {&stretch[0], &stretch[1]};
+  if (b[0]->power_law() && b[1]->power_law()) {
+    const Band::PowerLaw law[2] = {b[0]->power_law_terms(), b[1]->power_law_terms()};
+    const Band::PowerLaw* p[4] = {&law[s[0] & 1], &law[s[1] & 1], &law[s[2] & 1], &law[s[3] & 1]};
+    return tensile_band4(q, p);
+  }
+  BandValue bv[4];
+  for (int l = 0; l < 4; ++l) bv[l] = b[s[l] & 1]->at(q[l]);
+  return band_four(bv);
+}
+
+// Four elements' bands at their strains q (element l's: warp's where s[l]
+// is even, else weft's): linear bands in the lanes, any other by Band::at
+// lane by lane.
+BandFour bands_four(const Band& warp, const Band& weft, const int64_t s[4], D4 q) {
+  const Band* b[4] = {s[0] & 1 ? &weft : &warp, s[1] & 1 ? &weft : &warp, s[2] & 1 ? &weft : &warp,
+                      s[3] & 1 ? &weft : &warp};
+  if (warp.plain_linear() && weft.plain_linear())
+    return linear_band4(q, D4{b[0]->slope(), b[1]->slope(), b[2]->slope(), b[3]->slope()},
+                        D4{b[0]->half_width(), b[1]->half_width(), b[2]->half_width(), b[3]->half_width()});
+  BandValue bv[4];
+  for (int l = 0; l < 4; ++l) bv[l] = b[l]->at(q[l]);
+  return band_four(bv);
+}
+
+BandValue lane_value(const BandFour& b, int l) { return {b.lo[l], b.hi[l], b.dlo[l], b.dhi[l]}; }
 #endif
 }  // namespace
 
@@ -512,18 +543,13 @@ void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], con
   const D4 L0{c_.edge_rest[s[0]], c_.edge_rest[s[1]], c_.edge_rest[s[2]], c_.edge_rest[s[3]]};
   const D4 w{c_.edge_width[s[0]], c_.edge_width[s[1]], c_.edge_width[s[2]], c_.edge_width[s[3]]};
   const D4 q = loadu4(L) / L0 - splat4(1.0);
-  BandValue bv[4];
   double rev[4], f[4];
-  for (int l = 0; l < 4; ++l) {
-    const Band& b = m_.stretch[s[l] & 1];
-    bv[l] = b.at(q[l]);  // once: the power law is costly
-    rev[l] = b.reversal();
-  }
-  const BandFour b4 = band_four(bv);
+  for (int l = 0; l < 4; ++l) rev[l] = m_.stretch[s[l] & 1].reversal();
+  const BandFour b4 = stretch_four(m_.stretch, s, q);  // once: the power law is costly
   const StopFour st = band_stop4(loadu4(&anc_e_[pos]), loadu4(rev), b4);
   for (int l = 0; l < 4; ++l) {
     const Band::Stop stl{st.f[l], st.df_dq[l]};
-    active_.note(0, pos + l, q[l], bv[l], stl);
+    if (active_.enabled()) active_.note(0, pos + l, q[l], lane_value(b4, l), stl);
     const int64_t t = c_.layout.tension() + s[l];
     f[l] = settle ? (settle[t] = stl.f) : z[t];
     if (settle && keep_)
@@ -544,18 +570,13 @@ void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], 
   const D4 Lm{c_.triple_rest[s[0]], c_.triple_rest[s[1]], c_.triple_rest[s[2]], c_.triple_rest[s[3]]};
   const D4 w{c_.triple_width[s[0]], c_.triple_width[s[1]], c_.triple_width[s[2]], c_.triple_width[s[3]]};
   const D4 q = loadu4(th) / Lm;
-  BandValue bv[4];
   double rev[4], f[4];
-  for (int l = 0; l < 4; ++l) {
-    const Band& b = m_.bend[s[l] & 1];
-    bv[l] = b.at(q[l]);
-    rev[l] = b.reversal();
-  }
-  const BandFour b4 = band_four(bv);
+  for (int l = 0; l < 4; ++l) rev[l] = m_.bend[s[l] & 1].reversal();
+  const BandFour b4 = bands_four(m_.bend[0], m_.bend[1], s, q);
   const StopFour st = band_stop4(loadu4(&anc_t_[pos]), loadu4(rev), b4);
   for (int l = 0; l < 4; ++l) {
     const Band::Stop stl{st.f[l], st.df_dq[l]};
-    active_.note(1, pos + l, q[l], bv[l], stl);
+    if (active_.enabled()) active_.note(1, pos + l, q[l], lane_value(b4, l), stl);
     const int64_t m = c_.layout.moment() + s[l];
     f[l] = settle ? (settle[m] = stl.f) : z[m];
     if (settle && keep_) kept_gradients(w[l] * stl.df_dq / Lm[l], g[l], 3, &kg_t_[kKgTriple * (pos + l)]);
@@ -677,14 +698,13 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
   const int64_t pos = run.base + k;
   const D4 A{c_.shear_area[s[0]], c_.shear_area[s[1]], c_.shear_area[s[2]], c_.shear_area[s[3]]};
   const D4 rest{c_.shear_rest[s[0]], c_.shear_rest[s[1]], c_.shear_rest[s[2]], c_.shear_rest[s[3]]};
-  BandValue bv[4];
-  for (int l = 0; l < 4; ++l) bv[l] = m_.shear.at(phi[l]);
-  const BandFour b4 = band_four(bv);
+  const int64_t one[4] = {0, 0, 0, 0};  // one band for every cell
+  const BandFour b4 = bands_four(m_.shear, m_.shear, one, loadu4(phi));
   const StopFour st = band_stop4(loadu4(&anc_s_[pos]), splat4(m_.shear.reversal()), b4);
   double f[4];
   for (int l = 0; l < 4; ++l) {
     const Band::Stop stl{st.f[l], st.df_dq[l]};
-    active_.note(2, pos + l, phi[l], bv[l], stl);
+    if (active_.enabled()) active_.note(2, pos + l, phi[l], lane_value(b4, l), stl);
     const int64_t t = c_.layout.shear() + s[l];
     f[l] = settle ? (settle[t] = stl.f) : z[t];
     if (settle && keep_) kept_gradients(A[l] * stl.df_dq, g[l], 4, &kg_s_[kKgCell * (pos + l)]);
