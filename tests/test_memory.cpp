@@ -71,8 +71,8 @@ TEST(Memory, TablesListWhatTheWorldHolds) {
 // The bounds: what the tables listed at 300 x 300 when they were set, plus
 // 4 bytes (a stray array of doubles would show). Newton's runs hold no nonlinear-CG vectors, the CG's no Newton ones.
 TEST(Memory, BytesPerParticleStayUnderTheBound) {
-  EXPECT_LE(held_after_two_steps(SolverMethod::Newton, 300).listed, 1676.0);
-  EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1964.0);
+  EXPECT_LE(held_after_two_steps(SolverMethod::Newton, 300).listed, 1524.0);
+  EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1812.0);
 }
 
 // The cloth's arrays are the grid's on every rank: 247 bytes a particle
@@ -178,6 +178,42 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
       EXPECT_GT(finest.at(must), 0u) << to_string(method) << ": " << must << ": not checked";
     EXPECT_GE(checked, 10) << to_string(method);
   }
+}
+
+// The evaluator's two largest rows hold what the kernels need and no more,
+// bytes a grid particle of a finest 129 x 129 Newton run (2 edges, 2
+// triples and a cell a particle, a little less at the borders): the element
+// buffers an edge's one entry (3 doubles: its ends' are each other's
+// negatives), a triple's 9, a cell's 12, 36 doubles; the kept numbers an
+// edge's 8, a triple's 7 (kept_bend), a cell's 13 and a particle's 6, 49
+// doubles. K's frozen slopes and tensions, which the kept numbers carry,
+// are held only by an evaluator that does not keep them. Both ends' entries
+// of an edge, a triple's three gradients, or the frozen slopes beside the
+// kept numbers held again fail here.
+TEST(Memory, ElementBuffersAndKeptNumbersHoldNoMore) {
+  Scene s;
+  s.cloth.particles = {129, 129};
+  s.cloth.tile = 16;
+  s.solver.method = SolverMethod::Newton;
+  Simulation w(s, test_fabric());
+  w.step();
+  MemoryTable t;
+  w.loop->evaluator().memory(t);
+  const double per = 1.0 / double(w.cloth.grid.n());
+  const double buffers = double(row_bytes(t, "Evaluator: element buffers (edges, triples, cells)")) * per;
+  const double kept = double(row_bytes(t, "Evaluator: products' kept numbers (elements, contact)")) * per;
+  std::printf("element buffers %.1f, kept numbers %.1f bytes a particle\n", buffers, kept);
+  EXPECT_GT(buffers, 0.95 * 36 * 8);
+  EXPECT_LE(buffers, 36 * 8);
+  EXPECT_GT(kept, 0.95 * 49 * 8);
+  EXPECT_LE(kept, 49 * 8);
+  const std::string frozen = "Evaluator: K's frozen slopes and tensions";
+  EXPECT_EQ(row_bytes(t, frozen), 0u);
+  w.loop->evaluator().keep_products(false);
+  MemoryTable off;
+  w.loop->evaluator().memory(off);
+  EXPECT_GT(double(row_bytes(off, frozen)) * per, 0.95 * 7 * 8) << "not keeping, the products read them";
+  EXPECT_EQ(row_bytes(off, "Evaluator: products' kept numbers (elements, contact)"), 0u);
 }
 
 // Keeping the products again (keep_products sizes its arrays to the lists,

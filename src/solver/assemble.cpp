@@ -118,7 +118,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
     for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
       for (int k = 0; k < 2; ++k)
         if (at[k] >= 0) {
-          const int64_t pos = at[k] / kEdgeSlot, part = (at[k] % kEdgeSlot) / 3;
+          const int64_t pos = at[k] / kEdgeEntry, part = k;  // place 0: its first end
           const double* ke = &kg_e_[kKgEdge * pos];
           const int64_t s = slot_at(lists_.edges, lists_.ring_edges, pos);
           const int64_t ends[2] = {s >> 1, nb_e_[pos]};
@@ -136,7 +136,12 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
           const int64_t pos = at[k] / kTripleSlot, part = (at[k] % kTripleSlot) / 3;
           int64_t ids[3];
           triple_ids(slot_at(lists_.triples, lists_.ring_triples, pos), pos, ids);
-          rank_one(&kg_t_[kKgTriple * pos], 3, int(part), ids, w, columns);
+          double kg[1 + 3 * 3];  // the factor and the three gradients, as a cell's
+          V3<double> g[3];
+          kept_bend_gradients(&kg_t_[kKgTriple * pos], g);
+          kg[0] = kg_t_[kKgTriple * pos];
+          for (int i = 0; i < 3; ++i) kg[1 + 3 * i] = g[i].x, kg[2 + 3 * i] = g[i].y, kg[3 + 3 * i] = g[i].z;
+          rank_one(kg, 3, int(part), ids, w, columns);
         }
     }
     for (int k = 0; k < 4; ++k)

@@ -96,22 +96,24 @@ void Evaluator::fit_arrays(bool exact) {
     fit(v, per * count, per * most, exact, fill);
   };
   const size_t me = 2 * n, mt = 2 * n, ms = n;  // the grid's slots
-  each(buf_e_, ne, kEdgeSlot, me, 0.0);
+  each(buf_e_, ne, kEdgeEntry, me, 0.0);
   each(buf_t_, nt, kTripleSlot, mt, 0.0);
   each(buf_s_, ns, kShearSlot, ms, 0.0);
   each(cost_e_, ne, 1, me, 0.0);
   each(cost_t_, nt, 1, mt, 0.0);
   each(cost_s_, ns, 1, ms, 0.0);
   if (slopes_) fit_slopes(exact);
-  each(k_tension_, ne, 1, me, 0.0);
-  each(k_slope_e_, ne, 1, me, 0.0);
-  each(k_slope_t_, nt, 1, mt, 0.0);
-  each(k_slope_s_, ns, 1, ms, 0.0);
-  if (keep_) {
+  if (!keep_) {  // keeping, the kept numbers carry them
+    each(k_tension_, ne, 1, me, 0.0);
+    each(k_slope_e_, ne, 1, me, 0.0);
+    each(k_slope_t_, nt, 1, mt, 0.0);
+    each(k_slope_s_, ns, 1, ms, 0.0);
+  } else {
     each(kg_e_, ne, kKgEdge, me, 0.0);
     each(kg_t_, nt, kKgTriple, mt, 0.0);
     each(kg_s_, ns, kKgCell, ms, 0.0);
     each(kc_, nr, kKc, n, 0.0);
+    for (auto* a : {&k_tension_, &k_slope_e_, &k_slope_t_, &k_slope_s_}) std::vector<double>().swap(*a);
   }
   each(rows_, nr, 1, n, GatherRow{});
   each(rho_, np, 3, n, 0.0);
@@ -148,7 +150,7 @@ void Evaluator::fit_to_lists(bool exact) {
 void Evaluator::keep_products(bool on) {
   for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_}) std::vector<double>().swap(*a);  // off: no memory
   keep_ = on;
-  if (on) fit_to_lists(true);  // may move the rows too: listed again at the next call
+  fit_to_lists(true);  // the frozen slopes' arrays follow (off: held); may move the rows: listed again at the next call
   kg_ready_ = settled_ = false;
 }
 
@@ -239,12 +241,12 @@ bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
 
 bool Evaluator::listed_row(int64_t p, GatherRow& row, ListWalk& walk) const {
   std::fill(row.at, row.at + 16, -1);
-  static constexpr int width[3] = {kEdgeSlot, kTripleSlot, kShearSlot};
+  static constexpr int width[3] = {kEdgeEntry, kTripleSlot, kShearSlot};
   bool listed = true;
   for_gathered(p, [&](int place, int kind, int64_t s, int part) {
     const int64_t pos = walk.position(place, kind, s);
-    if (pos >= 0)
-      row.at[place] = int32_t(width[kind] * pos + 3 * part);
+    if (pos >= 0)  // an edge's one entry serves both its ends (the gather knows which by place)
+      row.at[place] = int32_t(width[kind] * pos + (kind == 0 ? 0 : 3 * part));
     else
       listed = false;
   });
@@ -523,8 +525,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   active_.note(0, pos, L / L0 - 1.0, bv, st);
   const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
   if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
-  put(&buf_e_[kEdgeSlot * pos], g[0], f * w);
-  put(&buf_e_[kEdgeSlot * pos + 3], g[1], f * w);
+  put(&buf_e_[kEdgeEntry * pos], g[1], f * w);
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / m_.force_scale;
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
@@ -555,8 +556,7 @@ void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], con
     if (settle && keep_)
       edge_kept(z + 3 * (s[l] >> 1), z + 3 * int64_t(nb_e_[pos + l]), L[l], std::max(0.0, stl.f), stl.df_dq / L0[l],
                 w[l], &kg_e_[kKgEdge * (pos + l)]);
-    put(&buf_e_[kEdgeSlot * (pos + l)], g[l][0], f[l] * w[l]);
-    put(&buf_e_[kEdgeSlot * (pos + l) + 3], g[l][1], f[l] * w[l]);
+    put(&buf_e_[kEdgeEntry * (pos + l)], g[l][1], f[l] * w[l]);
   }
   const bool slopes = !gq_e_.empty();  // a gradient's slopes (evaluate with one)
   band_costs4(b4, st, loadu4(f), w / splat4(m_.force_scale), m_.use_stretch, m_.memory, &L0, &cost_e_[pos],
@@ -579,7 +579,7 @@ void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], 
     if (active_.enabled()) active_.note(1, pos + l, q[l], lane_value(b4, l), stl);
     const int64_t m = c_.layout.moment() + s[l];
     f[l] = settle ? (settle[m] = stl.f) : z[m];
-    if (settle && keep_) kept_gradients(w[l] * stl.df_dq / Lm[l], g[l], 3, &kg_t_[kKgTriple * (pos + l)]);
+    if (settle && keep_) kept_bend(w[l] * stl.df_dq / Lm[l], g[l], &kg_t_[kKgTriple * (pos + l)]);
     for (int i = 0; i < 3; ++i) put(&buf_t_[kTripleSlot * (pos + l) + 3 * i], g[l][i], f[l] * w[l]);
   }
   const bool slopes = !gq_t_.empty();
@@ -635,7 +635,7 @@ void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], con
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   active_.note(1, pos, th / Lm, bv, st);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
-  if (settle && keep_) kept_gradients(w * st.df_dq / Lm, g, 3, &kg_t_[kKgTriple * pos]);
+  if (settle && keep_) kept_bend(w * st.df_dq / Lm, g, &kg_t_[kKgTriple * pos]);
   for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
   const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / (Lm * m_.force_scale);
@@ -737,11 +737,7 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
   for (int k = 0; k < 3; ++k)
     r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
            fc[k];
-  gather_listed(row, [&](const double* v) {
-    r[0] += v[0];
-    r[1] += v[1];
-    r[2] += v[2];
-  });
+  gather_vector(row, r);
   if (passed)  // forces passed on by hanging particles (zero elsewhere)
     for (int k = 0; k < 3; ++k) r[k] += passed[k];
   const double inv = it.inv_scale;
@@ -795,8 +791,7 @@ void Evaluator::edge_gradient_out(int64_t s, int64_t pos, const V& ra, const V& 
                                   const double* z, double* grad) {
   const double w = c_.edge_width[s], f = z[c_.layout.tension() + s];
   const double fw = f * w / m_.force_scale, gq = gq_e_[pos];
-  put(&buf_e_[kEdgeSlot * pos], (-fw) * hv + gq * g[0], 1.0);
-  put(&buf_e_[kEdgeSlot * pos + 3], fw * hv + gq * g[1], 1.0);
+  put(&buf_e_[kEdgeEntry * pos], fw * hv + gq * g[1], 1.0);  // the first end's is (-fw) hv + gq g[0]
   if (double* o = force_entry(grad, 0, s, pos)) *o = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[pos];
 }
 
@@ -870,11 +865,7 @@ void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, 
     const double mca = c_.mass[p] * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
-  gather_listed(row, [&](const double* v) {
-    g[0] += v[0];
-    g[1] += v[1];
-    g[2] += v[2];
-  });
+  gather_vector(row, g);
   const int64_t o = particle_entry(p, pos);
   for (int k = 0; k < 3; ++k) grad[o + k] = g[k];
 }
@@ -1070,11 +1061,7 @@ void Evaluator::hanging_gradient(const double* z, double* grad) {
     contact_force(m_.contact, z + 3 * h, fc, &rho_grid_[3 * h], jtr);
     friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_grid_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
-    gather_listed(row, [&](const double* c) {
-      v[0] += c[0];
-      v[1] += c[1];
-      v[2] += c[2];
-    });
+    gather_vector(row, v);
   }, 1.0, 0.0);
 }
 
@@ -1151,11 +1138,7 @@ void Evaluator::hanging_forces(const double* z) {
     contact_force(m_.contact, z + 3 * g.h, fc);
     friction_force(m_.contact, z + 3 * g.h, &c_.x1[3 * g.h], fc);
     for (int k = 0; k < 3; ++k) f[k] = hres_[sh + k] - fc[k];
-    gather_listed(hanging_row(i), [&](const double* v) {
-      f[0] += v[0];
-      f[1] += v[1];
-      f[2] += v[2];
-    });
+    gather_vector(hanging_row(i), f);
     for (int k = 0; k < 3; ++k) {
       hres_[sa + k] += (1 - g.t) * f[k];
       hres_[sb + k] += g.t * f[k];
@@ -1216,7 +1199,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
     const double eps = L / L0 - 1;
     const double geo = f * w / L, band = w * band_slope(anc_e_[pos], m_.stretch[d], f, eps) / L0;
-    for (int k = 0; k < 2; ++k) buf_e_[kEdgeSlot * pos + 3 * k] = (2 * geo * geo + band * band) * inv2;
+    buf_e_[kEdgeEntry * pos] = (2 * geo * geo + band * band) * inv2;  // both ends'
     const double nf = double(c_.free(p)) + double(c_.free(q));
     if (double* o = force_entry(diag, 0, s, pos)) *o = w * w * (nf + outside(m_.stretch[d], f, eps) + m_.memory) * inv2;
   });
@@ -1268,7 +1251,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     if (m_.self_contact) slope += self_.slope_sum(p, z) / 3;
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
-    gather_listed(rows_[pos], [&](const double* v) { dsum += v[0]; });
+    gather_diagonal(rows_[pos], dsum);
     const int64_t o = particle_entry(p, pos);
     for (int k = 0; k < 3; ++k) diag[o + k] = dsum;
   });
@@ -1277,7 +1260,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
     slope += friction_trace(m_.contact, z + 3 * h, &c_.x1[3 * h]) / 3;
     double dsum = slope * slope * inv2;
-    gather_listed(row, [&](const double* c) { dsum += c[0]; });
+    gather_diagonal(row, dsum);
     v[0] = v[1] = v[2] = dsum;
   }, 2.0, 1.0);
   // An unknown nothing depends on has a zero gradient too: any scale will do.

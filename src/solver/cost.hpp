@@ -19,6 +19,7 @@
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
 #include "solver/band_active_set.hpp"
+#include "solver/elements/kept_K.hpp"
 #include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
 #include "solver/list_walk.hpp"
@@ -150,9 +151,11 @@ class Evaluator {
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
   // Whether stiffness_product keeps its z-only numbers across a linear
-  // solve (55 doubles a listed particle; on from the start): off, every
-  // product computes them again, the same numbers (bench_gradient's
-  // BM_KeptProducts times both). Allocates: call it before the time loop.
+  // solve (49 doubles a listed particle; K's 7 frozen slopes and tensions
+  // a particle are then not held: the kept numbers carry them; on from the
+  // start): off, every product computes them again, the same numbers
+  // (bench_gradient's BM_KeptProducts times both). Allocates: call it
+  // before the time loop.
   void keep_products(bool on);
   // Newton through the bands' kinks (band_active_set.hpp): on, every
   // evaluation notes each band element's strain, force and branch.
@@ -393,8 +396,19 @@ class Evaluator {
   const double* cost_z_ = nullptr;
   template <class Visit>
   void for_gathered(int64_t p, Visit&& visit) const;
-  template <class Add>
-  void gather_listed(const GatherRow& row, Add&& add) const;
+  // add(c) for each entry of the row in the gather's order, sub(c) where
+  // the particle is an edge's first end (its entry is the other end's,
+  // negated: kEdgeEntry).
+  template <class Add, class Sub>
+  void gather_listed(const GatherRow& row, Add&& add, Sub&& sub) const;
+  // The row's entries summed into out (3), gather_listed's order: forces,
+  // gradients, K v. Written out: the particle passes' inner loop.
+  void gather_vector(const GatherRow& row, double out[3]) const;
+  // Their first numbers summed into sum: diagonals (an edge's is the same at both ends).
+  void gather_diagonal(const GatherRow& row, double& sum) const {
+    const auto add = [&](const double* c) { sum += c[0]; };
+    gather_listed(row, add, add);
+  }
   // p's row (any active particle: the hanging ones, which have no place in
   // the particle list, too); false if one of its elements is in no list,
   // left out of the row. That happens only to a hanging particle far from
@@ -479,8 +493,13 @@ class Evaluator {
   const LoopPolicy& pol_;
   const Reducer& red_;
   const Halo& halo_;
-  static_assert(kShearSlot == 12 && kEdgeSlot == 6 && kTripleSlot == 9, "buffer slots: 2, 3, 4 particles x 3");
-  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (6, 9, 12), list order
+  static_assert(kShearSlot == 12 && kTripleSlot == 9, "buffer slots: 3, 4 particles x 3");
+  // An edge's contributions to its ends are each other's negatives (its
+  // strain's gradient is -u, u, and every pass's contribution is linear in
+  // it), negated exactly: its buffer holds its second end's (3 doubles),
+  // which the first end gathers negated, or, for a diagonal, as it is.
+  static constexpr int kEdgeEntry = 3;
+  std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (3, 9, 12), list order
   std::vector<double> cost_p_;                    // Newton cost per free particle, list order
   // Per element, in list order like buf_*: a coarse mesh's elements lie far
   // apart in grid order, one cache line each per array.
@@ -489,16 +508,17 @@ class Evaluator {
   std::vector<double> gf_e_, gf_t_, gf_s_;        // band cost derivative wrt the element force
   std::vector<double> rho_;                       // scaled Newton residual, 3 per free particle, list order
   std::vector<double> rho_grid_;                  // the same at z's indices, ghosts too (gradients only)
-  std::vector<double> k_slope_e_, k_slope_t_, k_slope_s_;  // K's frozen band slopes, list order
+  std::vector<double> k_slope_e_, k_slope_t_, k_slope_s_;  // K's frozen band slopes, list order (not keeping)
   std::vector<double> k_tension_;                 // and edge tensions
   // stiffness_product's z-only numbers (keep_products), the elements' by
   // list position, the particles' by row (rows_): edges (edge_kept), triples
-  // and cells (slope factor, then the gradient, 3 or 4 x 3), contact (force,
-  // size, slope) and mass coefficient. Kept by settled_cost (elements) and
+  // (kept_bend: slope factor, two gradients) and cells (slope factor, then
+  // the gradient, 4 x 3), contact (force, size, slope) and mass
+  // coefficient. Kept by settled_cost (elements) and
   // the diagonal after it (particles), or all by a diagonal at a z no
   // settled_cost saw (or, after a list change, by the next product);
   // kg_ready_ while they are all the linear solve's z's.
-  static constexpr int kKgEdge = 8, kKgTriple = 10, kKgCell = 13, kKc = 6;
+  static constexpr int kKgEdge = 8, kKgTriple = kKeptBend, kKgCell = 13, kKc = 6;
   // settled_cost keeps the elements' numbers (settled_, until another
   // evaluation, new anchors or a list change): they are its band stops and gradients, so
   // stiffness_diagonal at the same z reads them instead of computing the
@@ -512,7 +532,7 @@ class Evaluator {
   // tension, slope / rest length and width.
   static void edge_kept(const double* za, const double* zb, double length, double tension, double slope_per_rest,
                         double width, double* ke);
-  // A triple's or cell's: the slope factor, then the n gradients.
+  // A cell's: the slope factor, then the n gradients (a triple's: kept_bend).
   template <class V>
   static void kept_gradients(double factor, const V* g, int n, double* kg) {
     kg[0] = factor;
@@ -641,12 +661,35 @@ void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
 }
 
 // A particle's entries of the element buffers, from its row.
-template <class Add>
-void Evaluator::gather_listed(const GatherRow& row, Add&& add) const {
+template <class Add, class Sub>
+void Evaluator::gather_listed(const GatherRow& row, Add&& add, Sub&& sub) const {
   const int32_t* at = row.at;
   const double *e = buf_e_.data(), *t = buf_t_.data(), *s = buf_s_.data();
   for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
-    if (at[0] >= 0) add(e + at[0]);
+    if (at[0] >= 0) sub(e + at[0]);  // p is the edge's first end
+    if (at[1] >= 0) add(e + at[1]);
+    if (at[2] >= 0) add(t + at[2]);
+    if (at[3] >= 0) add(t + at[3]);
+    if (at[4] >= 0) add(t + at[4]);
+  }
+  for (int k = 0; k < 4; ++k)
+    if (at[k] >= 0) add(s + at[k]);
+}
+
+inline void Evaluator::gather_vector(const GatherRow& row, double out[3]) const {
+  const int32_t* at = row.at;
+  const double *e = buf_e_.data(), *t = buf_t_.data(), *s = buf_s_.data();
+  const auto add = [out](const double* c) {
+    out[0] += c[0];
+    out[1] += c[1];
+    out[2] += c[2];
+  };
+  for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
+    if (at[0] >= 0) {  // out - c is out + (-c): the first end's entry's sum, bit for bit
+      out[0] -= e[at[0]];
+      out[1] -= e[at[0] + 1];
+      out[2] -= e[at[0] + 2];
+    }
     if (at[1] >= 0) add(e + at[1]);
     if (at[2] >= 0) add(t + at[2]);
     if (at[3] >= 0) add(t + at[3]);

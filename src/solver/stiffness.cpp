@@ -140,19 +140,25 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   // kept by the diagonal (from settled_cost's pass in Newton's order), or
   // by a first product after a list change; the products read it back, bit
   // for bit the same numbers. Not keeping, every product computes it.
-  const bool fill = !keep_ || !kg_ready_;
+  // Keeping, the frozen slopes live in the kept numbers only: a product
+  // needs the diagonal's first (Newton's order).
+  if (keep_ && !kg_ready_) throw std::logic_error("Evaluator::stiffness_product: needs stiffness_diagonal first");
+  const bool fill = !keep_;
+  // Not keeping, an edge's numbers computed anew: out of line, so that the
+  // kept path's few operations inline into the pass's loop.
+  const auto edge_anew = [&](int64_t s, int64_t pos, double* ke) __attribute__((noinline)) {
+    const int64_t p = s >> 1, q = nb_e_[pos];
+    const V e = at(z, q) - at(z, p);
+    edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / c_.edge_rest[s],
+              c_.edge_width[s], ke);
+  };
   auto edge = [&](int64_t s, int64_t pos) {
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
-    if (fill) {
-      const int64_t p = s >> 1, q = nb_e_[pos];
-      const V e = at(z, q) - at(z, p);
-      edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / c_.edge_rest[s],
-                c_.edge_width[s], ke);
-    }
+    if (fill) edge_anew(s, pos, ke);
     V out[2];
     edge_product(ke, at(v, lo_e_[2 * pos + 1]) - at(v, lo_e_[2 * pos]), out);
-    for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], out[k]);
+    put(&buf_e_[kEdgeEntry * pos], out[1]);  // out[0] is -out[1]
   };
   // The grid ids (z's) only where the z-only numbers are computed: the
   // operand's reads go through the own numbering's tables.
@@ -164,12 +170,12 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
       triple_ids(s, pos, ids);
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
-      kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, 3, kg);
+      kept_bend(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, kg);
     }
     const int32_t* l = &lo_t_[3 * pos];
     const V vk[3] = {at(v, l[0]), at(v, l[1]), at(v, l[2])};
     V out[3];
-    kept_gradient_product<3>(kg, vk, out);
+    kept_bend_product(kg, vk, out);
     for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], out[k]);
   };
   auto shear = [&](int64_t s, int64_t pos) {
@@ -211,11 +217,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     add_friction_product(p, z, vp, out);
     if (m_.self_contact)  // partners: free here, or contact ghosts (numbered with the others)
       self_.add_product_local(p, z, vp, v, out);
-    gather_listed(rows_[pos], [&](const double* c) {
-      out[0] += c[0];
-      out[1] += c[1];
-      out[2] += c[2];
-    });
+    gather_vector(rows_[pos], out);
     for (int k = 0; k < 3; ++k) kv[3 * pos + k] = out[k];
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
@@ -227,11 +229,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
     for (int k = 0; k < 3; ++k) out[k] = fn > 0 ? slope * nv * fc[k] / fn : 0.0;
     add_friction_product(h, z, vh, out);
-    gather_listed(row, [&](const double* c) {
-      out[0] += c[0];
-      out[1] += c[1];
-      out[2] += c[2];
-    });
+    gather_vector(row, out);
   }, 1.0, 0.0);
   kg_ready_ = true;
 }
@@ -242,9 +240,9 @@ void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z, double* ke
   const double len = edge_length(at(z, p), at(z, q), g);
   const double L0 = c_.edge_rest[s];
   const Band::Stop st = m_.stretch[s & 1].stop(anc_e_[pos], len / L0 - 1);
-  k_tension_[pos] = std::max(0.0, st.f);
-  k_slope_e_[pos] = st.df_dq;
-  edge_kept(z + 3 * p, z + 3 * q, len, k_tension_[pos], st.df_dq / L0, c_.edge_width[s], ke);
+  const double tension = std::max(0.0, st.f);
+  if (!keep_) k_tension_[pos] = tension, k_slope_e_[pos] = st.df_dq;  // the products' (keeping: ke's)
+  edge_kept(z + 3 * p, z + 3 * q, len, tension, st.df_dq / L0, c_.edge_width[s], ke);
 }
 
 void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -254,8 +252,9 @@ void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* 
   const double th =
       bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
   const double Lm = c_.triple_rest[s];
-  k_slope_t_[pos] = m_.bend[s & 1].stop(anc_t_[pos], th / Lm).df_dq;
-  kept_gradients(c_.triple_width[s] * k_slope_t_[pos] / Lm, g, 3, kg);
+  const double slope = m_.bend[s & 1].stop(anc_t_[pos], th / Lm).df_dq;
+  if (!keep_) k_slope_t_[pos] = slope;
+  kept_bend(c_.triple_width[s] * slope / Lm, g, kg);
 }
 
 void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -264,8 +263,9 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
-  k_slope_s_[pos] = m_.shear.stop(anc_s_[pos], phi).df_dq;
-  kept_gradients(c_.shear_area[s] * k_slope_s_[pos], g, 4, kg);
+  const double slope = m_.shear.stop(anc_s_[pos], phi).df_dq;
+  if (!keep_) k_slope_s_[pos] = slope;
+  kept_gradients(c_.shear_area[s] * slope, g, 4, kg);
 }
 
 // The diagonal of K: per element and particle, its stiffness block's
@@ -291,7 +291,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
     if (!settled) edge_numbers(s, pos, z, ke);
-    buf_e_[kEdgeSlot * pos] = buf_e_[kEdgeSlot * pos + 3] = edge_diagonal(ke);
+    buf_e_[kEdgeEntry * pos] = edge_diagonal(ke);  // both ends'
   };
   auto gradients = [](const double* kg, double* buf, int n) {
     for (int k = 0; k < n; ++k) buf[3 * k] = kept_gradient_diagonal(kg, k);
@@ -300,7 +300,9 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double mine[kKgTriple];
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (!settled) triple_numbers(s, pos, z, kg);
-    gradients(kg, &buf_t_[kTripleSlot * pos], 3);
+    double d[3];
+    kept_bend_diagonal(kg, d);
+    for (int k = 0; k < 3; ++k) buf_t_[kTripleSlot * pos + 3 * k] = d[k];
   };
   auto shear = [&](int64_t s, int64_t pos) {
     double mine[kKgCell];
@@ -319,7 +321,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double dsum = kc[5] + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(p, z) / 3;
-    gather_listed(rows_[pos], [&](const double* c) { dsum += c[0]; });
+    gather_diagonal(rows_[pos], dsum);
     for (int k = 0; k < 3; ++k) diag[3 * pos + k] = dsum;
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
@@ -328,7 +330,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     const double* kc = contact_at(h, size_t(&row - rows_.data()), mine);
     double dsum = kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * h, &c_.x1[3 * h]) / 3;
-    gather_listed(row, [&](const double* c) { dsum += c[0]; });
+    gather_diagonal(row, dsum);
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);
   kg_ready_ = keep_;

@@ -35,7 +35,7 @@ struct KernelBytes {
 namespace traffic {
 constexpr double kD = 8, kI32 = 4, kI64 = 8;
 // An element's buffer entry (written by its pass, read by its particles' gather).
-constexpr double kEdgeBuf = 6 * kD, kTripleBuf = 9 * kD, kCellBuf = 12 * kD;
+constexpr double kEdgeBuf = 3 * kD, kTripleBuf = 9 * kD, kCellBuf = 12 * kD;
 }  // namespace traffic
 
 // evaluate(z, nullptr): the element forces and band costs, each particle's
@@ -76,7 +76,7 @@ inline KernelBytes cost_gradient_bytes() {
 inline KernelBytes product_bytes() {
   using namespace traffic;
   const double edge = kI64 + 2 * kI32 + 8 * kD + kEdgeBuf + kEdgeBuf;
-  const double triple = kI64 + 3 * kI32 + 10 * kD + kTripleBuf + kTripleBuf;
+  const double triple = kI64 + 3 * kI32 + 7 * kD + kTripleBuf + kTripleBuf;
   const double cell = kI64 + 4 * kI32 + 13 * kD + kCellBuf + kCellBuf;
   // item, row, contact numbers, operand; result out; the operand once per
   // element pass.
