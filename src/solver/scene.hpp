@@ -66,7 +66,10 @@ struct SolverSpec {
   // CG on the total cost. Both stop when the same cost is below tolerance.
   SolverMethod method = SolverMethod::Newton;
   Preconditioner preconditioner = Preconditioner::Jacobi;
-  int multigrid_particles = 10000;  // auto: a mesh with at least this many active particles takes the multigrid
+  // auto: a mesh with at least this many active particles takes the
+  // multigrid (the default run's meshes from level 5's 1089 on, where it
+  // reaches rest on less CPU than Jacobi)
+  int multigrid_particles = 1000;
   double multigrid_dt_max = 0.05;   // s, auto: dt_max on the multigrid's meshes (its dt follows Newton's count)
   int multigrid_max_iterations = 1000;  // auto: max_iterations on the multigrid's meshes
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
