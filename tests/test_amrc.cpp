@@ -696,12 +696,50 @@ TEST(GridSequence, StartLevelFromTheSpacing) {
 // grew the time more. The default run: 22 s on level 5, 88 s on level 4
 // (4.0x), 430 s left, and the 127 x 127 mesh still moving after 426 s.
 TEST(GridSequence, NextStageGrowsAsTheLastRefinementDid) {
-  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 0), 80);    // the first stage: particles and iterations
-  EXPECT_DOUBLE_EQ(next_stage_seconds(10, 5), 80);    // grew 2x: still the floor
-  EXPECT_DOUBLE_EQ(next_stage_seconds(99, 9), 99 * 11.0);  // grew 11x: that growth again
-  EXPECT_GT(next_stage_seconds(87.6, 21.9), 430);     // what the default run had left
+  const auto jacobi = [](double s) { return StageTime{s, false}; };
+  EXPECT_DOUBLE_EQ(next_stage_seconds(jacobi(10), {}, false), 80);  // the first stage: particles and iterations
+  EXPECT_DOUBLE_EQ(next_stage_seconds(jacobi(10), jacobi(5), false), 80);          // grew 2x: still the floor
+  EXPECT_DOUBLE_EQ(next_stage_seconds(jacobi(99), jacobi(9), false), 99 * 11.0);  // grew 11x: that growth again
+  EXPECT_GT(next_stage_seconds(jacobi(87.6), jacobi(21.9), false), 430);          // what the default run had left
 }
 
+// The next stage's preconditioner sets the floor; a growth seen under
+// another preconditioner does not carry over.
+TEST(GridSequence, NextStageKnowsItsPreconditioner) {
+  const StageTime j{10, false}, m{10, true};
+  EXPECT_DOUBLE_EQ(next_stage_seconds(j, {}, true), 10 * kMultigridStageGrowth);
+  EXPECT_DOUBLE_EQ(next_stage_seconds(m, StageTime{1, true}, true), 100);         // grew 10x: again
+  EXPECT_DOUBLE_EQ(next_stage_seconds(m, StageTime{1, false}, true), 10 * kMultigridStageGrowth);
+  EXPECT_DOUBLE_EQ(next_stage_seconds(j, StageTime{1, false}, true), 10 * kMultigridStageGrowth);
+  EXPECT_LT(kMultigridStageGrowth, kJacobiStageGrowth);
+  Grid g;
+  g.ni = g.nj = 1000;
+  EXPECT_EQ(uniform_level_particles(g, 5), 33 * 33);
+  EXPECT_EQ(uniform_level_particles(g, 4), 64 * 64);
+  EXPECT_EQ(uniform_level_particles(g, 0), 1000 * 1000);
+}
+
+
+// `auto`: Jacobi below solver.multigrid_particles, the multigrid from it on,
+// and Jacobi wherever the multigrid may not run; the explicit choices stay.
+TEST(GridSequence, AutoPreconditionerFromAMeshSize) {
+  SolverSpec s;
+  s.preconditioner = Preconditioner::Auto;
+  s.multigrid_particles = 4096;
+  EXPECT_EQ(stage_preconditioner(s, 4095, true), Preconditioner::Jacobi);
+  EXPECT_EQ(stage_preconditioner(s, 4096, true), Preconditioner::Multigrid);
+  EXPECT_EQ(stage_preconditioner(s, 4096, false), Preconditioner::Jacobi);  // several ranks with AMRC
+  const SolverSpec mg = stage_solver(s, 4096, true), j = stage_solver(s, 4095, true);
+  EXPECT_EQ(mg.dt_max, s.multigrid_dt_max);
+  EXPECT_EQ(mg.max_iterations, s.multigrid_max_iterations);
+  EXPECT_EQ(j.dt_max, s.dt_max);
+  EXPECT_EQ(j.max_iterations, s.max_iterations);
+  s.preconditioner = Preconditioner::Jacobi;
+  EXPECT_EQ(stage_preconditioner(s, 1 << 20, true), Preconditioner::Jacobi);
+  s.preconditioner = Preconditioner::Multigrid;
+  EXPECT_EQ(stage_preconditioner(s, 1, true), Preconditioner::Multigrid);
+  EXPECT_EQ(stage_solver(s, 1, true).dt_max, s.dt_max);  // explicit: the scene's own settings
+}
 
 // A split's stretched edges: eased to 1 % strain, the others untouched, and
 // back at the material's rest length after strain / rate seconds, no sooner.

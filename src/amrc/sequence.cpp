@@ -15,9 +15,15 @@ int sequence_start_level(const Grid& g, double spacing) {
   return level;
 }
 
-double next_stage_seconds(double last, double before) {
-  const double growth = before > 0 ? last / before : 0;
-  return last * std::max(8.0, growth);
+int64_t uniform_level_particles(const Grid& g, int level) {
+  const auto side = [level](int n) { return int64_t((n - 1 + (1 << level) - 1) >> level) + 1; };
+  return side(g.ni) * side(g.nj);
+}
+
+double next_stage_seconds(StageTime last, StageTime before, bool multigrid_next) {
+  const bool alike = before.multigrid == last.multigrid && last.multigrid == multigrid_next;
+  const double growth = before.seconds > 0 && alike ? last.seconds / before.seconds : 0;
+  return last.seconds * std::max(multigrid_next ? kMultigridStageGrowth : kJacobiStageGrowth, growth);
 }
 
 namespace {

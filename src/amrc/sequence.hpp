@@ -16,14 +16,31 @@ namespace drape {
 // 0 (start on the finest mesh) when spacing is 0 or below the grid's.
 int sequence_start_level(const Grid& g, double spacing);
 
+// The particles of the uniform mesh at `level` (a side's last interval
+// clipped: the 1000 x 1000 grid's level 5 has 33 x 33).
+int64_t uniform_level_particles(const Grid& g, int level);
+
+// A finished stage's wall seconds (0: none yet) and whether the multigrid
+// preconditioned its Newton steps (else Jacobi).
+struct StageTime {
+  double seconds = 0;
+  bool multigrid = false;
+};
+
 // The wall time the next finer mesh will take, from the last two stages'
-// (`before` 0: none yet): at least 8 times the last (4 times the particles,
-// twice the linear iterations a solve: halving the spacing doubles them
-// with either preconditioner), and the growth the last refinement showed
-// when larger. A stage that starts near rest can grow less than that (the
-// default run's level 4 took 4.0 times level 5's 22 s), and its successor
-// then did not reach rest in the 430 s left.
-double next_stage_seconds(double last, double before);
+// and the preconditioner the next one takes: at least 8 times the last
+// with Jacobi next (4 times the particles, twice the linear iterations a
+// solve: halving the spacing doubles them), kMultigridStageGrowth times with the
+// multigrid next (its iterations grow 1.6 times a halving: 3.9 times from
+// 65 to 513), and the growth the last refinement showed when larger and one
+// preconditioner solved all three. A stage that starts near rest can grow
+// less than that (the default run's level 4 took 4.0 times level 5's 22 s),
+// and its successor then did not reach rest in the 430 s left. Jacobi to the
+// multigrid (solver.preconditioner = "auto") takes the multigrid's floor:
+// the switch is meant where both cost alike on the last mesh.
+constexpr double kJacobiStageGrowth = 8.0;
+constexpr double kMultigridStageGrowth = 6.4;
+double next_stage_seconds(StageTime last, StageTime before, bool multigrid_next);
 
 }  // namespace drape
 

@@ -135,6 +135,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
         .value("from_time", g.time)
         .value("level", g.level)
         .value("particles", (long long)g.particles)
+        .value("stage_preconditioner", g.preconditioner)
         // Names of their own: the top level's "steps" etc. stay the first match.
         .value("stage_steps", (long long)g.steps)
         .value("stage_newton_iterations", (long long)g.newton)

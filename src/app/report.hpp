@@ -54,6 +54,7 @@ struct Summary {
     double time;
     int level;
     int64_t particles;
+    const char* preconditioner = "";  // Newton's on this mesh ("auto" resolved), "none" with nonlinear CG
     int64_t steps = 0, newton = 0, linear = 0, evaluations = 0;
     int64_t retries = 0, contact_halvings = 0, multigrid_builds = 0;
     double seconds = 0, cpu_seconds = 0;  // wall and this process's CPU time of its steps

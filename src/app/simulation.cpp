@@ -42,9 +42,12 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
   make_output_dir();
   rebuild_lists();
   sum_.active_min = sum_.active_max = sum_.active_final = active_particles(cloth);
-  if (sequence_level_ > 0) sum_.stages.push_back({cloth.step, cloth.time, sequence_level_, sum_.active_final});
   policy = LoopPolicy{scene.parallel.schedule, scene.parallel.chunk};
   loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red(), scene.solver, dec_.ghosts());
+  loop->set_solver(mesh_solver());
+  if (sequence_level_ > 0)
+    sum_.stages.push_back(
+        {cloth.step, cloth.time, sequence_level_, sum_.active_final, stage_preconditioner_name()});
   if (opt_.restart) loop->minimizer().set_first_step(opt_.restart->counters.cg_first_step);
   own_blocks();
 }
@@ -71,6 +74,20 @@ void Simulation::refuse_unsupported() const {
     throw InputError("solver.preconditioner = \"multigrid\" with solver.self_contact = true runs on one rank "
                      "only (K's contact blocks across ranks are not yet checked against one rank's); run it "
                      "without mpirun or use \"jacobi\"");
+}
+
+// `auto` takes the multigrid on fine meshes where it may run: on several
+// ranks not with AMRC or self-contact (refuse_unsupported), Jacobi there.
+bool Simulation::multigrid_allowed() const {
+  return ranks_ == 1 || !(scene.amrc.enabled || scene.solver.self_contact);
+}
+
+SolverSpec Simulation::mesh_solver() const {
+  return stage_solver(scene.solver, sum_.active_final, multigrid_allowed());
+}
+
+const char* Simulation::stage_preconditioner_name() const {
+  return scene.solver.method == SolverMethod::Newton ? to_string(loop->preconditioner()) : "none";
 }
 
 // The cloth, new or the checkpoint's, on its first mesh.
@@ -132,6 +149,8 @@ void Simulation::rebuild() {
   rebuild_lists();
   policy = LoopPolicy{scene.parallel.schedule, scene.parallel.chunk};
   loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, red(), scene.solver);
+  sum_.active_final = active_particles(cloth);
+  loop->set_solver(mesh_solver());
 }
 
 void Simulation::set_tree(const Quadtree& t) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "amrc/amrc.hpp"
+#include "amrc/sequence.hpp"
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "decomp/decomposition.hpp"
@@ -104,6 +105,11 @@ class Simulation {
   using clock = std::chrono::steady_clock;
 
   void refuse_unsupported() const;
+  // The solver settings for the current mesh, `auto` resolved
+  // (stage_solver), and the preconditioner's name a stage reports.
+  bool multigrid_allowed() const;
+  SolverSpec mesh_solver() const;
+  const char* stage_preconditioner_name() const;
   void set_up_mesh();
   void set_up_tree(int start_level);
   void set_up_model();
@@ -147,7 +153,7 @@ class Simulation {
   double finest_force_scale_ = 0;
   double ease_until_ = 0;  // stretched edges eased by the last split relax until this time
   clock::time_point stage_start_;
-  double stage_before_ = 0;  // the previous stage's wall seconds
+  StageTime stage_before_;  // the previous stage's wall seconds and preconditioner
   int last_frame_ = -1;       // the step of the last frame written (-1: none yet)
   int last_checkpoint_ = -1;
   // Code of an agreed stop request: 2 * signal + wall budget.

@@ -57,7 +57,8 @@ void Simulation::next_stage() {
   mesh_changed(true);
   const double eased = red().max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
   ease_until_ = cloth.time + eased / kEaseRate;
-  sum_.stages.push_back({cloth.step, cloth.time, sequence_level_, sum_.active_final});
+  sum_.stages.push_back(
+      {cloth.step, cloth.time, sequence_level_, sum_.active_final, stage_preconditioner_name()});
   sum_.counters.calm = 0;  // at rest on the coarser mesh, not on this one
   sum_.at_rest = false;
   if (talk_)
@@ -72,12 +73,17 @@ void Simulation::next_stage() {
 bool Simulation::finer_mesh_fits() {
   const auto now = clock::now();
   const double stage = std::chrono::duration<double>(now - stage_start_).count();
-  const double next = next_stage_seconds(stage, stage_before_);
+  const StageTime last{stage, loop->preconditioner() == Preconditioner::Multigrid};
+  const bool multigrid_next =
+      scene.solver.method == SolverMethod::Newton &&
+      stage_preconditioner(scene.solver, uniform_level_particles(cloth.grid, sequence_level_ - 1),
+                           multigrid_allowed()) == Preconditioner::Multigrid;
+  const double next = next_stage_seconds(last, stage_before_, multigrid_next);
   const double left = scene.solver.wall_limit - std::chrono::duration<double>(now - t0_).count();
   const bool fits = root_decides(comm_, scene.solver.wall_limit <= 0 || next < left);
   if (fits) {
     stage_start_ = now;
-    stage_before_ = stage;
+    stage_before_ = last;
   } else if (talk_) {
     std::printf("at rest after step %d (t = %.4g s) on level %d: the next finer mesh would take "
                 "about %.0f s of the %.0f s left (solver.wall_limit): ending here\n",
@@ -96,6 +102,7 @@ void Simulation::mesh_changed(bool new_stage) {
   sum_.active_min = std::min(sum_.active_min, active);
   sum_.active_max = std::max(sum_.active_max, active);
   sum_.active_final = active;
+  loop->set_solver(mesh_solver());  // `auto`: the multigrid from a mesh size on
 }
 
 void Simulation::rebalance() {

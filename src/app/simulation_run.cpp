@@ -67,7 +67,7 @@ int Simulation::run() {
       const StepStats st = step();
       if (st.stopped) break;
       const Ending end = ending(st);
-      if (sum_.at_rest && sequence_level_ > 0 && !end.last && finer_mesh_fits()) next_stage();
+      if (sum_.at_rest && sequence_level_ > scene.amrc.last_level && !end.last && finer_mesh_fits()) next_stage();
       if (!end.last && !sum_.at_rest && due(scene.output.every, st.step)) write();
       if (scene.amrc.enabled && st.step % scene.amrc.every == 0) adapt();
       if (due(scene.output.checkpoint_every, st.step)) checkpoint();

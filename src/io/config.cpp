@@ -445,15 +445,16 @@ Scene load_scene_text(const std::string& toml, const std::string& origin,
 void check_restart_overrides(const std::vector<std::string>& overrides) {
   // What may change when a run continues: how long, how it is written and
   // how it is run; never the physics, or the restart would not continue it.
-  static const char* const allowed[] = {"solver.steps", "solver.end_time", "solver.wall_limit", "output.",
-                                        "parallel."};
+  static const char* const allowed[] = {"solver.steps", "solver.end_time", "solver.wall_limit", "amrc.last_level",
+                                        "output.", "parallel."};
   for (const std::string& o : overrides) {
     const std::string key = trim(o.substr(0, o.find('=')));
     bool ok = false;
     for (const char* a : allowed) ok = ok || key == a || (a[std::strlen(a) - 1] == '.' && key.rfind(a, 0) == 0);
     if (!ok)
       fail("--set " + o, key + " cannot change on --restart (the checkpoint fixes the physics); "
-                          "allowed: solver.steps, solver.end_time, solver.wall_limit, output.*, parallel.*");
+                          "allowed: solver.steps, solver.end_time, solver.wall_limit, amrc.last_level, output.*, "
+                          "parallel.*");
   }
 }
 

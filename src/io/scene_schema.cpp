@@ -97,13 +97,30 @@ void declare_solver(ParameterList& list) {
            "`newton`: Newton steps on the force balance, each solved by preconditioned linear CG; `cg`: "
            "the paper's nonlinear CG on the total cost. Both stop at the same cost "
            "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("cg")
-      .add("preconditioner", &SolverSpec::preconditioner, {Preconditioner::Jacobi, Preconditioner::Multigrid},
-           "newton's linear CG: jacobi | multigrid",
+      .add("preconditioner", &SolverSpec::preconditioner,
+           {Preconditioner::Jacobi, Preconditioner::Multigrid, Preconditioner::Auto},
+           "newton's linear CG: jacobi | multigrid | auto",
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
            "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; "
            "on several ranks the levels are built from all ranks' rows and run on every rank alike, bitwise one rank's "
-           "result; not with AMRC or self-contact on several ranks) ([design.md §7](design.md))")
+           "result; not with AMRC or self-contact on several ranks) ([design.md §7](design.md)); `auto`: "
+           "each mesh (grid sequencing's stages) takes the multigrid from `multigrid_particles` active particles on, "
+           "Jacobi below it and wherever the multigrid may not run (several ranks with AMRC or self-contact)")
           .example("multigrid")
+      .add("multigrid_particles", &SolverSpec::multigrid_particles, "", at_least(1),
+           "auto: active particles from which a mesh takes the multigrid",
+           "with `preconditioner = \"auto\"`, a mesh of at least this many active particles is solved with "
+           "the multigrid, a smaller one with Jacobi ([performance.md](performance.md#what-limits-dt-in-the-time-loop))")
+          .example("4000")
+      .add("multigrid_dt_max", &SolverSpec::multigrid_dt_max, "s", positive(),
+           "auto: dt_max on the meshes that take the multigrid",
+           "with `preconditioner = \"auto\"`, the meshes solved with the multigrid step up to this (their dt "
+           "follows Newton's iteration count, `newton_target`); Jacobi's keep `dt_max`").example("0.02")
+      .add("multigrid_max_iterations", &SolverSpec::multigrid_max_iterations, "", at_least(1),
+           "auto: max_iterations on the meshes that take the multigrid",
+           "with `preconditioner = \"auto\"`, a step on a multigrid mesh may take this many linear CG iterations "
+           "(a long step's Newton iterations need them); Jacobi's meshes keep `max_iterations`, which their dt "
+           "rule reads").example("500")
       .add("newton_target", &SolverSpec::newton_target, "", at_least(1),
            "multigrid: Newton iterations per step that dt grows under",
            "with `preconditioner = \"multigrid\"`, dt grows (×1.25) after a step of at most this many Newton "
@@ -211,7 +228,11 @@ void declare_amrc(ParameterList& list) {
            "air drag on every mesh while grid sequencing (the meshes lead to the rest state, and drag "
            "vanishes at rest, but with the hysteresis bands the rest state remembers the path the drag "
            "damped: [performance.md](performance.md#what-limits-dt-in-the-time-loop)); `report.json` "
-           "`stage_drag`").example("5.0");
+           "`stage_drag`").example("5.0")
+      .add("last_level", &AmrcSpec::last_level, "", non_negative(),
+           "grid sequencing ends at rest on this level; 0: the finest",
+           "AMRC off: the run ends at rest on the uniform mesh of this level (the finest mesh's spacing "
+           "times 2^level) instead of refining further; 0: refine to the finest").example("3");
 }
 
 ParameterList declare() {

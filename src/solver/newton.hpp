@@ -38,6 +38,12 @@ class NewtonSolver {
   // The multigrid's levels (empty with Jacobi).
   const std::vector<MultigridLevelStats>& multigrid_stats() const { return mg_.stats(); }
   Preconditioner preconditioner() const { return pc_; }
+  // Between steps (grid sequencing's next mesh): the multigrid is built at
+  // the next solve.
+  void set_preconditioner(Preconditioner pc) {
+    pc_ = pc;
+    mg_solves_ = 0;
+  }
   // Hierarchies built so far (a step's count: the difference across it).
   int64_t multigrid_builds() const { return mg_builds_; }
   // The V-cycle's settings (before the first solve, or between steps).

@@ -51,8 +51,24 @@ const char* to_string(Preconditioner p) {
   switch (p) {
     case Preconditioner::Jacobi: return "jacobi";
     case Preconditioner::Multigrid: return "multigrid";
+    case Preconditioner::Auto: return "auto";
   }
   return "?";
+}
+
+Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles, bool multigrid_allowed) {
+  if (s.preconditioner != Preconditioner::Auto) return s.preconditioner;
+  return multigrid_allowed && particles >= s.multigrid_particles ? Preconditioner::Multigrid : Preconditioner::Jacobi;
+}
+
+SolverSpec stage_solver(const SolverSpec& s, int64_t particles, bool multigrid_allowed) {
+  SolverSpec t = s;
+  t.preconditioner = stage_preconditioner(s, particles, multigrid_allowed);
+  if (s.preconditioner == Preconditioner::Auto && t.preconditioner == Preconditioner::Multigrid) {
+    t.dt_max = s.multigrid_dt_max;
+    t.max_iterations = s.multigrid_max_iterations;
+  }
+  return t;
 }
 
 const char* to_string(AmrcIndicator i) {

@@ -2,6 +2,7 @@
 // The scene a run simulates: plain data, SI units, already validated.
 // src/io/config.cpp fills it from TOML; the solver only reads it.
 #include <array>
+#include <cstdint>
 #include <string>
 
 namespace drape {
@@ -16,7 +17,7 @@ enum class Schedule { ActiveLists, Static, Dynamic, Guided };
 enum class SolverMethod { Newton, Cg };
 // The Newton step's linear solve: CG preconditioned by the stiffness's
 // diagonal, or by a multigrid V-cycle over the grid's levels (one rank).
-enum class Preconditioner { Jacobi, Multigrid };
+enum class Preconditioner { Jacobi, Multigrid, Auto };
 // What AMRC's thresholds are compared with (AmrcSpec::indicator).
 enum class AmrcIndicator { Angle, Deflection };
 
@@ -65,6 +66,12 @@ struct SolverSpec {
   // CG on the total cost. Both stop when the same cost is below tolerance.
   SolverMethod method = SolverMethod::Newton;
   Preconditioner preconditioner = Preconditioner::Jacobi;
+  // auto: a mesh with at least this many active particles takes the
+  // multigrid (the default run's meshes from level 5's 1089 on, where it
+  // reaches rest on less CPU than Jacobi)
+  int multigrid_particles = 1000;
+  double multigrid_dt_max = 0.05;   // s, auto: dt_max on the multigrid's meshes (its dt follows Newton's count)
+  int multigrid_max_iterations = 1000;  // auto: max_iterations on the multigrid's meshes
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
   bool slope_line_search = false;  // Newton's line search on the energy slope (else backtracking on the cost)
   bool band_active_set = false;  // Newton: re-solve a step with the tangent of the band branches it lands on
@@ -127,6 +134,9 @@ struct AmrcSpec {
   // sequencing, every mesh, the finest included, runs with
   // max(solver.drag, stage_drag); without it, solver.drag applies.
   double stage_drag = 10.0;
+  // Grid sequencing ends at rest on this level (0: the finest mesh): a
+  // stage measured on its own, or a coarse drape kept as the result.
+  int last_level = 0;
 };
 
 struct Scene {
@@ -145,6 +155,19 @@ const char* to_string(GradientMode g);
 const char* to_string(Schedule s);
 const char* to_string(SolverMethod m);
 const char* to_string(Preconditioner p);
+
+// The preconditioner a mesh of `particles` active particles is solved
+// with: `auto` takes the multigrid from solver.multigrid_particles on (its
+// linear iterations barely grow as the spacing halves, Jacobi's double, and
+// its longer steps pay for the builds only on fine meshes), Jacobi below,
+// and Jacobi wherever the multigrid is not allowed (several ranks with
+// AMRC or self-contact); `jacobi` and `multigrid` as they are.
+Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles, bool multigrid_allowed);
+// The solver settings for that mesh: `auto`'s multigrid meshes take
+// multigrid_dt_max and multigrid_max_iterations (a step's linear budget
+// must not cut the multigrid's long steps short; Jacobi's dt rule reads
+// max_iterations, so its meshes keep theirs).
+SolverSpec stage_solver(const SolverSpec& s, int64_t particles, bool multigrid_allowed);
 const char* to_string(AmrcIndicator i);
 
 }  // namespace drape

@@ -57,6 +57,16 @@ class TimeLoop {
   Minimizer& minimizer() { return cg_; }
   NewtonSolver& newton() { return newton_; }
   int64_t free_particles() const { return free_; }
+  // Jacobi or the multigrid (never `auto`: Simulation resolves it per mesh,
+  // stage_solver), with its dt_max and max_iterations, switched between
+  // steps; dt's rule follows it (next_time_step).
+  Preconditioner preconditioner() const { return spec_.preconditioner; }
+  void set_solver(const SolverSpec& s) {
+    if (s.preconditioner != spec_.preconditioner) newton_.set_preconditioner(s.preconditioner);
+    spec_.preconditioner = s.preconditioner;
+    spec_.dt_max = s.dt_max;
+    spec_.max_iterations = s.max_iterations;
+  }
 
   // The arrays of the evaluator, both solvers and the step's saved unknowns.
   void memory(MemoryTable& t) const;
