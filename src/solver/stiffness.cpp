@@ -141,15 +141,17 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   // by a first product after a list change; the products read it back, bit
   // for bit the same numbers. Not keeping, every product computes it.
   const bool fill = !keep_ || !kg_ready_;
+  // Out of line: the kept products' edge pass stays small enough to inline.
+  auto fill_edge = [&](int64_t s, int64_t pos, double* ke) __attribute__((noinline)) {
+    const int64_t p = s >> 1, q = nb_e_[pos];
+    const V e = at(z, q) - at(z, p);
+    edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / rest_e_[pos],
+              width_e_[pos], ke);
+  };
   auto edge = [&](int64_t s, int64_t pos) {
     double mine[kKgEdge];
     double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
-    if (fill) {
-      const int64_t p = s >> 1, q = nb_e_[pos];
-      const V e = at(z, q) - at(z, p);
-      edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / rest_e_[pos],
-                width_e_[pos], ke);
-    }
+    if (fill) fill_edge(s, pos, ke);
     V out[2];
     edge_product(ke, at(v, lo_e_[2 * pos + 1]) - at(v, lo_e_[2 * pos]), out);
     for (int k = 0; k < 2; ++k) put(&buf_e_[kEdgeSlot * pos + 3 * k], out[k]);
