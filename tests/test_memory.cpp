@@ -75,10 +75,10 @@ TEST(Memory, BytesPerParticleStayUnderTheBound) {
   EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1812.0);
 }
 
-// The cloth's arrays are the grid's on every rank: 247 bytes a particle
+// The cloth's arrays are the grid's on every rank: 167 bytes a particle
 // (z 64, x1 and x2 48, mass, flags and level 10, neighbour tables 16,
-// switches 5, cells' corners 24, rest geometry 80). What a step derives
-// from them (bending axes, band anchors) the evaluator holds in list order;
+// switches 5, cells' corners 24). What a step derives from them (rest
+// geometry, bending axes, band anchors) the evaluator holds in list order;
 // an array of doubles a particle added to the cloth fails here.
 TEST(Memory, ClothHoldsOnlyItsGridArrays) {
   Scene s;
@@ -88,7 +88,7 @@ TEST(Memory, ClothHoldsOnlyItsGridArrays) {
   add_memory(t, w.cloth);
   const double per = double(t.total()) / double(w.cloth.grid.n());
   std::printf("the cloth: %.1f bytes a particle\n", per);
-  EXPECT_LE(per, 248.0);
+  EXPECT_LE(per, 168.0);
 }
 
 size_t evaluator_bytes(Simulation& w) {
@@ -174,6 +174,7 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
                                                         : "NewtonSolver: d, r, s, diagonal (compact); p, K p (own numbering)";
     for (const char* must : {"Evaluator: residual", "Evaluator: particles' Newton costs",
                              "Evaluator: hanging particles' forces and results",
+                             "Evaluator: rest geometry (lengths, widths, areas)",
                              "TimeLoop: saved unknowns (a step's retry)", solver_row})
       EXPECT_GT(finest.at(must), 0u) << to_string(method) << ": " << must << ": not checked";
     EXPECT_GE(checked, 10) << to_string(method);

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "amrc/amrc.hpp"
+#include "mesh/topology.hpp"
 #include "solver/shear_cell.hpp"
 #include "support/scenes.hpp"
 
@@ -43,7 +44,7 @@ TEST_P(ShearCells, AreTheLeavesAndTileTheCloth) {
   for (int64_t s = 0; s < c.grid.n(); ++s) {
     if (!c.shear_on[s]) continue;
     ++on;
-    area += c.shear_area[s];
+    area += cell_area(c, s);
     int64_t ids[4];
     shear_cell(c, s, ids);
     for (int k = 0; k < 3; ++k) {

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "mesh/active_lists.hpp"
+#include "mesh/topology.hpp"
+#include "solver/cost.hpp"
 
 namespace drape {
 
@@ -33,11 +35,7 @@ namespace {
 constexpr double kEasedStrain = 0.01;
 
 // The edge's rest length in the material: its span on the finest grid.
-double material_rest(const Cloth& c, int64_t s) {
-  const int d = int(s & 1);
-  const int64_t p = s >> 1;
-  return double(c.next[d][p] - p) / double(c.grid.stride(d)) * c.grid.h(d);
-}
+double material_rest(const Cloth& c, int64_t s) { return edge_rest_geometry(c, s).rest; }
 
 double length(const Cloth& c, int64_t s) {
   const double* x = c.x();
@@ -47,38 +45,38 @@ double length(const Cloth& c, int64_t s) {
   return std::sqrt(d2);
 }
 
-template <class F>
-void for_both(const ActiveList& edges, const ActiveList& ring, F&& f) {
-  for (const ActiveList* l : {&edges, &ring}) {
-    const int64_t n = l->size();
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n; ++k) f(l->items[k]);
-  }
-}
-
 }  // namespace
 
-double ease_stretched_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges) {
+double ease_stretched_edges(const Cloth& c, Evaluator& ev) {
+  double* rest_of = ev.edge_rest_lengths();
+  const ActiveList& edges = ev.lists().edges;
+  const ActiveList& ring = ev.lists().ring_edges;
   double worst = 0;
-  for (const ActiveList* l : {&edges, &ring_edges}) {
-    const int64_t n = l->size();
+  for (const ActiveList* l : {&edges, &ring}) {
+    const int64_t n = l->size(), base = l == &edges ? 0 : edges.size();
 #pragma omp parallel for schedule(static) reduction(max : worst)
     for (int64_t k = 0; k < n; ++k) {
       const int64_t s = l->items[k];
       const double rest = material_rest(c, s), len = length(c, s);
-      c.edge_rest[s] = std::max(rest, len / (1 + kEasedStrain));
+      rest_of[base + k] = std::max(rest, len / (1 + kEasedStrain));
       worst = std::max(worst, len / rest - 1);
     }
   }
   return worst;
 }
 
-void relax_eased_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges, double rate,
-                       double dt) {
-  for_both(edges, ring_edges, [&](int64_t s) {
-    const double rest = material_rest(c, s);
-    c.edge_rest[s] = std::max(rest, c.edge_rest[s] - rate * dt * rest);
-  });
+void relax_eased_edges(const Cloth& c, Evaluator& ev, double rate, double dt) {
+  double* rest_of = ev.edge_rest_lengths();
+  const ActiveList& edges = ev.lists().edges;
+  const ActiveList& ring = ev.lists().ring_edges;
+  for (const ActiveList* l : {&edges, &ring}) {
+    const int64_t n = l->size(), base = l == &edges ? 0 : edges.size();
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n; ++k) {
+      const double rest = material_rest(c, l->items[k]);
+      rest_of[base + k] = std::max(rest, rest_of[base + k] - rate * dt * rest);
+    }
+  }
 }
 
 }  // namespace drape

@@ -46,7 +46,7 @@ double next_stage_seconds(StageTime last, StageTime before, bool multigrid_next)
 
 namespace drape {
 
-struct ActiveList;
+class Evaluator;
 
 // A split's new particle on a coarse edge that crossed an obstacle's rim
 // is lifted out of the obstacle, and its two new edges come out stretched
@@ -54,11 +54,12 @@ struct ActiveList;
 // go round it); released at once, they fling the cloth (12 m/s seen). So
 // the split eases them: each edge stretched beyond 1 % gets a rest length
 // that leaves it 1 %, which shrinks back to the material's at `rate` (strain per
-// second). Returns the largest strain eased on this rank's edges.
+// second). The rest lengths are the evaluator's (its listed edges', the
+// ring's too), laid out from the mesh at each list change. Returns the
+// largest strain eased on this rank's edges.
 constexpr double kEaseRate = 2.0;  // strain per second
-double ease_stretched_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges);
+double ease_stretched_edges(const Cloth& c, Evaluator& ev);
 // One step of dt: rest lengths move rate * dt (strain) back towards the material's.
-void relax_eased_edges(Cloth& c, const ActiveList& edges, const ActiveList& ring_edges, double rate,
-                       double dt);
+void relax_eased_edges(const Cloth& c, Evaluator& ev, double rate, double dt);
 
 }  // namespace drape

@@ -55,7 +55,7 @@ void Simulation::next_stage() {
   }
   stage_physics();
   mesh_changed(true);
-  const double eased = red().max(ease_stretched_edges(cloth, lists.edges, lists.ring_edges));
+  const double eased = red().max(ease_stretched_edges(cloth, loop->evaluator()));
   ease_until_ = cloth.time + eased / kEaseRate;
   sum_.stages.push_back(
       {cloth.step, cloth.time, sequence_level_, sum_.active_final, stage_preconditioner_name()});

@@ -95,7 +95,7 @@ StepStats Simulation::step() {
       loop->step(tm_, [&](int it, double cost) { progress_->iteration(cloth.step + 1, it, cost); });
   if (st.stopped) return st;
   account(st, wall0, cpu0);
-  if (cloth.time < ease_until_) relax_eased_edges(cloth, lists.edges, lists.ring_edges, kEaseRate, st.dt);
+  if (cloth.time < ease_until_) relax_eased_edges(cloth, loop->evaluator(), kEaseRate, st.dt);
   progress_->step(st, amrc ? sum_.active_final : -1);
   return st;
 }

@@ -78,9 +78,8 @@ struct Cloth {
   // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k][p]
   // is the slot whose corner k+1 p is (at most one: the leaves tile the cloth).
   std::vector<int32_t> cell[3], corner_of[3];
-  // Rest geometry per slot, from the active mesh: rest length and the width
-  // (edges, triples) or area (shear cells) the element stands for.
-  std::vector<double> edge_rest, edge_width, triple_rest, triple_width, shear_area, shear_rest;
+  // The elements' rest geometry is not held here: the evaluator keeps its
+  // own elements' in list order (mesh/topology.hpp computes it).
   double time = 0, dt = 1e-3, dt_prev = 1e-3;
   int step = 0;
 

@@ -122,27 +122,30 @@ double cell_quarters(const Cloth& c, int64_t p) {
 }  // namespace
 
 void rebuild_geometry(Cloth& c, double density) {
-  const Grid& g = c.grid;
-  const int64_t n = g.n();
+  const int64_t n = c.grid.n();
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < n; ++p) {
     const double ext[2] = {c.active(p) ? extent(c, p, 0) : 0, c.active(p) ? extent(c, p, 1) : 0};
     c.mass[p] = c.active(p) && near_removed(c, p) ? density * cell_quarters(c, p) : density * ext[0] * ext[1];
-    double len[2] = {0, 0};
-    for (int d = 0; d < 2; ++d) {
-      const int64_t s = 2 * p + d;
-      if (c.next[d][p] >= 0) len[d] = double(c.next[d][p] - p) / g.stride(d) * g.h(d);
-      c.edge_rest[s] = c.edge_on[s] ? len[d] : 0;
-      c.edge_width[s] =
-          c.edge_on[s] ? 0.5 * (ext[1 - d] + extent(c, c.next[d][p], 1 - d)) : 0;
-      c.triple_rest[s] = c.triple_on[s] ? ext[d] : 0;
-      c.triple_width[s] = c.triple_on[s] ? ext[1 - d] : 0;
-    }
-    // A cell stands for its own area.
-    const double area = c.shear_on[p] ? double(c.cell[0][p] - p) / g.nj * g.hi * double(c.cell[1][p] - p) * g.hj : 0;
-    c.shear_area[p] = area;
-    c.shear_rest[p] = std::sqrt(area);
   }
+}
+
+RestGeometry edge_rest_geometry(const Cloth& c, int64_t s) {
+  const int64_t p = s >> 1, q = c.next[s & 1][p];
+  const int d = int(s & 1);
+  const double len = double(q - p) / c.grid.stride(d) * c.grid.h(d);
+  return {len, 0.5 * (extent(c, p, 1 - d) + extent(c, q, 1 - d))};
+}
+
+RestGeometry triple_rest_geometry(const Cloth& c, int64_t s) {
+  const int d = int(s & 1);
+  return {extent(c, s >> 1, d), extent(c, s >> 1, 1 - d)};
+}
+
+// A cell stands for its own area.
+double cell_area(const Cloth& c, int64_t s) {
+  const Grid& g = c.grid;
+  return double(c.cell[0][s] - s) / g.nj * g.hi * double(c.cell[1][s] - s) * g.hj;
 }
 
 }  // namespace drape

@@ -64,26 +64,22 @@ int64_t Evaluator::kink_tangents() {
   if (!active_.enabled() || !keep_ || !settled_) return 0;
   int64_t changed = 0;
   double s;
-  auto item = [](const ActiveList& own, const ActiveList& ring, int64_t pos) {
-    return pos < own.size() ? own.items[pos] : ring.items[pos - own.size()];
-  };
   const int64_t ne = lists_.edges.size() + lists_.ring_edges.size();
   for (int64_t pos = 0; pos < ne; ++pos)
     if (active_.secant(0, pos, &s)) {
-      kg_e_[kKgEdge * pos + 6] = s / c_.edge_rest[item(lists_.edges, lists_.ring_edges, pos)];
+      kg_e_[kKgEdge * pos + 6] = s / rest_e_[pos];
       ++changed;
     }
   const int64_t nt = lists_.triples.size() + lists_.ring_triples.size();
   for (int64_t pos = 0; pos < nt; ++pos)
     if (active_.secant(1, pos, &s)) {
-      const int64_t t = item(lists_.triples, lists_.ring_triples, pos);
-      kg_t_[kKgTriple * pos] = c_.triple_width[t] * s / c_.triple_rest[t];
+      kg_t_[kKgTriple * pos] = width_t_[pos] * s / rest_t_[pos];
       ++changed;
     }
   const int64_t ns = lists_.shears.size() + lists_.ring_shears.size();
   for (int64_t pos = 0; pos < ns; ++pos)
     if (active_.secant(2, pos, &s)) {
-      kg_s_[kKgCell * pos] = c_.shear_area[item(lists_.shears, lists_.ring_shears, pos)] * s;
+      kg_s_[kKgCell * pos] = area_s_[pos] * s;
       ++changed;
     }
   return changed;

@@ -10,6 +10,7 @@
 #include "solver/fit.hpp"
 #include "solver/kernels.hpp"
 #include "solver/shear_cell.hpp"
+#include "mesh/topology.hpp"
 
 namespace drape {
 
@@ -128,6 +129,10 @@ void Evaluator::fit_arrays(bool exact) {
   fit_keeping(anc_e_, ne, me, exact, 0.0);
   fit_keeping(anc_t_, nt, mt, exact, 0.0);
   fit_keeping(anc_s_, ns, ms, exact, 0.0);
+  // The rest geometry too (its edges' eased rest lengths are state).
+  for (auto* v : {&rest_e_, &width_e_}) fit_keeping(*v, ne, me, exact, 0.0);
+  for (auto* v : {&rest_t_, &width_t_}) fit_keeping(*v, nt, mt, exact, 0.0);
+  for (auto* v : {&area_s_, &root_s_}) fit_keeping(*v, ns, ms, exact, 0.0);
   active_.fit(0, ne, me, exact);
   active_.fit(1, nt, mt, exact);
   active_.fit(2, ns, ms, exact);
@@ -177,6 +182,7 @@ void Evaluator::memory(MemoryTable& t) const {
         local_.bytes() + (hang_lo_.capacity() + halo_send_.capacity() + halo_recv_.capacity()) * sizeof(int32_t));
   t.add(o, "hanging particles' results (own numbering)", hpend_lo_);
   t.add(o, "bending axes", axis_t_);
+  t.add(o, "rest geometry (lengths, widths, areas)", sum({&rest_e_, &width_e_, &rest_t_, &width_t_, &area_s_, &root_s_}));
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
   t.add(o, "hanging particles' forces and results",
@@ -255,6 +261,7 @@ bool Evaluator::listed_row(int64_t p, GatherRow& row, ListWalk& walk) const {
 
 void Evaluator::list_rows(bool derive) {
   build_rows();
+  lay_out_rest();
   if (local_on_ && local_stale()) build_local(false);
   // New lists: the axes and anchors held are in the old lists' order. An
   // entry point that reads them first computes them from the cloth's history
@@ -306,6 +313,27 @@ void Evaluator::build_rows() {
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   ListWalk walk(lists_, tiling_);
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i], walk);
+}
+
+// Once a list change: the mesh's rest geometry, each element's at its
+// position. Between changes the rest lengths stay as eased (sequence.hpp).
+void Evaluator::lay_out_rest() {
+  if (rest_stamp_ == lists_.stamp && lists_.stamp != 0) return;
+  rest_stamp_ = lists_.stamp;
+  for_edges([&](int64_t s, int64_t pos) {
+    const RestGeometry r = edge_rest_geometry(c_, s);
+    rest_e_[pos] = r.rest;
+    width_e_[pos] = r.width;
+  });
+  for_triples([&](int64_t s, int64_t pos) {
+    const RestGeometry r = triple_rest_geometry(c_, s);
+    rest_t_[pos] = r.rest;
+    width_t_[pos] = r.width;
+  });
+  for_shears([&](int64_t s, int64_t pos) {
+    area_s_[pos] = cell_area(c_, s);
+    root_s_[pos] = std::sqrt(area_s_[pos]);
+  });
 }
 
 void Evaluator::use_local() {
@@ -519,7 +547,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   const int64_t p = s >> 1;
   const int d = int(s & 1);
   const int64_t q = nb_e_[pos];
-  const double L0 = c_.edge_rest[s], w = c_.edge_width[s];
+  const double L0 = rest_e_[pos], w = width_e_[pos];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
   active_.note(0, pos, L / L0 - 1.0, bv, st);
@@ -541,8 +569,7 @@ void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], con
                            double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
-  const D4 L0{c_.edge_rest[s[0]], c_.edge_rest[s[1]], c_.edge_rest[s[2]], c_.edge_rest[s[3]]};
-  const D4 w{c_.edge_width[s[0]], c_.edge_width[s[1]], c_.edge_width[s[2]], c_.edge_width[s[3]]};
+  const D4 L0 = loadu4(&rest_e_[pos]), w = loadu4(&width_e_[pos]);
   const D4 q = loadu4(L) / L0 - splat4(1.0);
   double rev[4], f[4];
   for (int l = 0; l < 4; ++l) rev[l] = m_.stretch[s[l] & 1].reversal();
@@ -567,8 +594,7 @@ void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], 
                              double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
-  const D4 Lm{c_.triple_rest[s[0]], c_.triple_rest[s[1]], c_.triple_rest[s[2]], c_.triple_rest[s[3]]};
-  const D4 w{c_.triple_width[s[0]], c_.triple_width[s[1]], c_.triple_width[s[2]], c_.triple_width[s[3]]};
+  const D4 Lm = loadu4(&rest_t_[pos]), w = loadu4(&width_t_[pos]);
   const D4 q = loadu4(th) / Lm;
   double rev[4], f[4];
   for (int l = 0; l < 4; ++l) rev[l] = m_.bend[s[l] & 1].reversal();
@@ -630,7 +656,7 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
 
 void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], const double* z, double* settle) {
   const int d = int(s & 1);
-  const double Lm = c_.triple_rest[s], w = c_.triple_width[s];
+  const double Lm = rest_t_[pos], w = width_t_[pos];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   active_.note(1, pos, th / Lm, bv, st);
@@ -653,7 +679,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
-  const double A = c_.shear_area[s];
+  const double A = area_s_[pos];
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   active_.note(2, pos, phi, bv, st);
@@ -661,7 +687,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
-  const double lam = A / (c_.shear_rest[s] * m_.force_scale);
+  const double lam = A / (root_s_[pos] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
   if (!gq_s_.empty()) {  // a gradient's slopes (evaluate with one)
@@ -696,8 +722,7 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
                             double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
-  const D4 A{c_.shear_area[s[0]], c_.shear_area[s[1]], c_.shear_area[s[2]], c_.shear_area[s[3]]};
-  const D4 rest{c_.shear_rest[s[0]], c_.shear_rest[s[1]], c_.shear_rest[s[2]], c_.shear_rest[s[3]]};
+  const D4 A = loadu4(&area_s_[pos]), rest = loadu4(&root_s_[pos]);
   const int64_t one[4] = {0, 0, 0, 0};  // one band for every cell
   const BandFour b4 = bands_four(m_.shear, m_.shear, one, loadu4(phi));
   const StopFour st = band_stop4(loadu4(&anc_s_[pos]), splat4(m_.shear.reversal()), b4);
@@ -789,7 +814,7 @@ void Evaluator::edge_gradient(const ItemRun& run, const double* z, double* grad)
 // hv: the length's Hessian times (rb - ra).
 void Evaluator::edge_gradient_out(int64_t s, int64_t pos, const V& ra, const V& rb, const V g[2], const V& hv,
                                   const double* z, double* grad) {
-  const double w = c_.edge_width[s], f = z[c_.layout.tension() + s];
+  const double w = width_e_[pos], f = z[c_.layout.tension() + s];
   const double fw = f * w / m_.force_scale, gq = gq_e_[pos];
   put(&buf_e_[kEdgeEntry * pos], fw * hv + gq * g[1], 1.0);  // the first end's is (-fw) hv + gq g[0]
   if (double* o = force_entry(grad, 0, s, pos)) *o = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[pos];
@@ -823,7 +848,7 @@ void Evaluator::triple_gradient(const ItemRun& run, const double* z, double* gra
 
 void Evaluator::triple_gradient_out(int64_t s, int64_t pos, const V r[3], const V g[3], const V hr[3],
                                     const double* z, double* grad) {
-  const double w = c_.triple_width[s], f = z[c_.layout.moment() + s];
+  const double w = width_t_[pos], f = z[c_.layout.moment() + s];
   const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
   for (int k = 0; k < 3; ++k) {
@@ -841,7 +866,7 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[4], hr[4];
   shear_cell_hv(a.x, r, g, hr);
-  const double A = c_.shear_area[s], f = z[c_.layout.shear() + s];
+  const double A = area_s_[pos], f = z[c_.layout.shear() + s];
   const double fa = f * A / m_.force_scale, gq = gq_s_[pos];
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
@@ -1196,7 +1221,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     const int64_t q = nb_e_[pos];
     V g[2];
     const double L = edge_length(at(z, p), at(z, q), g);
-    const double L0 = c_.edge_rest[s], w = c_.edge_width[s], f = z[c_.layout.tension() + s];
+    const double L0 = rest_e_[pos], w = width_e_[pos], f = z[c_.layout.tension() + s];
     const double eps = L / L0 - 1;
     const double geo = f * w / L, band = w * band_slope(anc_e_[pos], m_.stretch[d], f, eps) / L0;
     buf_e_[kEdgeEntry * pos] = (2 * geo * geo + band * band) * inv2;  // both ends'
@@ -1210,7 +1235,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     V g[3];
     const V n = load3<double>(&axis_t_[3 * pos]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
-    const double Lm = c_.triple_rest[s], w = c_.triple_width[s], f = z[c_.layout.moment() + s];
+    const double Lm = rest_t_[pos], w = width_t_[pos], f = z[c_.layout.moment() + s];
     const double slope =
         band_slope(anc_t_[pos], m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
@@ -1230,7 +1255,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     const CellAt a = cell_at(ids, z);
     V g[4];
     const double phi = shear_cell(a.x, g);
-    const double A = c_.shear_area[s], Lr = c_.shear_rest[s], f = z[c_.layout.shear() + s];
+    const double A = area_s_[pos], Lr = root_s_[pos], f = z[c_.layout.shear() + s];
     const double slope = band_slope(anc_s_[pos], m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 4; ++k) {
@@ -1323,12 +1348,11 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   };
   for (int64_t p : lists_.particles.items)
     for (int k = 0; k < 3; ++k) diff(3 * p + k, p, hmin);
-  for (int64_t s : lists_.edges.items)
-    diff(c_.layout.tension() + s, s >> 1, F0 / c_.edge_width[s]);
-  for (int64_t s : lists_.triples.items)
-    diff(c_.layout.moment() + s, s >> 1, F0 * c_.triple_rest[s] / c_.triple_width[s]);
-  for (int64_t s : lists_.shears.items)
-    diff(c_.layout.shear() + s, s, F0 * c_.shear_rest[s] / c_.shear_area[s]);
+  // An element's position in its list is its index there (this rank's own).
+  const std::vector<int64_t>&e = lists_.edges.items, &t = lists_.triples.items, &c = lists_.shears.items;
+  for (size_t k = 0; k < e.size(); ++k) diff(c_.layout.tension() + e[k], e[k] >> 1, F0 / width_e_[k]);
+  for (size_t k = 0; k < t.size(); ++k) diff(c_.layout.moment() + t[k], t[k] >> 1, F0 * rest_t_[k] / width_t_[k]);
+  for (size_t k = 0; k < c.size(); ++k) diff(c_.layout.shear() + c[k], c[k], F0 * root_s_[k] / area_s_[k]);
   // Leave the buffers as evaluate() would have: at z.
   evaluate(z, nullptr);
   return cost;

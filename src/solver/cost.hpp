@@ -136,6 +136,19 @@ class Evaluator {
   // start (ghosts current). After a list change, an entry point that reads
   // them before this is called freezes them from the cloth's x1.
   void freeze_bend_axes(const double* x1);
+  // The listed edges' rest lengths (list order, the ring's after this
+  // rank's), laid out for the present lists: grid sequencing's eased edges
+  // lengthen and relax them between steps (amrc/sequence.hpp); a list change
+  // lays them out again from the mesh.
+  double* edge_rest_lengths() {
+    list_rows(false);
+    return rest_e_.data();
+  }
+  // Edge slot s's rest length as last laid out; NaN where s is in no list.
+  double edge_rest(int64_t s) const {
+    const int64_t pos = position_of(0, s);
+    return pos >= 0 ? rest_e_[size_t(pos)] : std::nan("");
+  }
   // Triple slot s's axis (3 values), nullptr where s is in no list.
   const double* bend_axis(int64_t s) const {
     const int64_t pos = position_of(1, s);
@@ -424,7 +437,7 @@ class Evaluator {
   }
   // Hanging particle i's (of lists_.hanging): kept after the particle list's.
   const GatherRow& hanging_row(size_t i) const { return rows_[lists_.particles.size() + i]; }
-  // Refreshes rows_ and the neighbours when the lists have changed (and,
+  // Refreshes rows_, the neighbours and the rest geometry when the lists have changed (and,
   // with `derive`, the axes and anchors where a list change left them stale).
   void list_rows(bool derive = true);
   void build_rows();
@@ -569,6 +582,13 @@ class Evaluator {
   std::vector<int32_t> nb_e_, nb_t_, nb_s_;
   // Each triple's bending axis (3 doubles), in list order too.
   std::vector<double> axis_t_;
+  // Each element's rest geometry (mesh/topology.hpp), in list order too:
+  // edges' and triples' rest lengths and widths, cells' areas and their
+  // square roots. Laid out when the lists change (rest_stamp_ their stamp),
+  // kept until then: grid sequencing eases edges' rest lengths in between.
+  std::vector<double> rest_e_, width_e_, rest_t_, width_t_, area_s_, root_s_;
+  uint64_t rest_stamp_ = 0;
+  void lay_out_rest();
   // Each element's band anchor (hysteresis_anchors), in list order too.
   std::vector<double> anc_e_, anc_t_, anc_s_;
   BandActiveSet active_;  // the elements' branches (off unless track_branches)

@@ -28,9 +28,6 @@ void add_memory(MemoryTable& t, const Cloth& c) {
   size_t cells = 0;
   for (int k = 0; k < 3; ++k) cells += cap(c.cell[k]) + cap(c.corner_of[k]);
   t.add(o, "cell, corner_of (shear cells' corners)", cells);
-  t.add(o, "rest geometry (lengths, widths, areas)",
-        cap(c.edge_rest) + cap(c.edge_width) + cap(c.triple_rest) + cap(c.triple_width) + cap(c.shear_area) +
-            cap(c.shear_rest));
 }
 
 void add_memory(MemoryTable& t, const ActiveLists& l) {

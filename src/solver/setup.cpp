@@ -116,10 +116,6 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
     c.cell[k].assign(n, -1);
     c.corner_of[k].assign(n, -1);
   }
-  for (auto* v : {&c.edge_rest, &c.edge_width, &c.triple_rest, &c.triple_width})
-    v->assign(2 * n, 0.0);
-  c.shear_area.assign(n, 0.0);
-  c.shear_rest.assign(n, 0.0);
   const double dt = scene.solver.dt, gz = -9.80665;
   double* x = c.x();
 #pragma omp parallel for schedule(static)

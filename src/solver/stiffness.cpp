@@ -26,13 +26,13 @@ inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 // Each element's generalized strain at positions x, as its band reads it:
 // edge strain (q: the far end), triple curvature about the frozen axis (ids:
 // previous, centre, next), shear angle (ids: the cell's corners).
-inline double edge_strain(const Cloth& c, const double* x, int64_t s, int64_t q) {
+inline double edge_strain(const double* x, int64_t s, int64_t q, double rest) {
   V g[2];
-  return edge_length(at(x, s >> 1), at(x, q), g) / c.edge_rest[s] - 1;
+  return edge_length(at(x, s >> 1), at(x, q), g) / rest - 1;
 }
-inline double triple_curvature(const Cloth& c, const double* x, int64_t s, const int64_t ids[3], const double* axis) {
+inline double triple_curvature(const double* x, const int64_t ids[3], const double* axis, double rest) {
   V g[3];
-  return bend_angle(at(x, ids[0]), at(x, ids[1]), at(x, ids[2]), load3<double>(axis), g) / c.triple_rest[s];
+  return bend_angle(at(x, ids[0]), at(x, ids[1]), at(x, ids[2]), load3<double>(axis), g) / rest;
 }
 inline double shear_strain(const double* x, const int64_t ids[4]) {
   const CellAt a = cell_at(ids, x);
@@ -42,12 +42,12 @@ inline double shear_strain(const double* x, const int64_t ids[4]) {
 }  // namespace
 
 double Evaluator::edge_strain_at(const double* x, int64_t s, int64_t pos) const {
-  return edge_strain(c_, x, s, nb_e_[pos]);
+  return edge_strain(x, s, nb_e_[pos], rest_e_[pos]);
 }
 double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos) const {
   int64_t ids[3];
   triple_ids(s, pos, ids);
-  return triple_curvature(c_, x, s, ids, &axis_t_[3 * pos]);
+  return triple_curvature(x, ids, &axis_t_[3 * pos], rest_t_[pos]);
 }
 double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos) const {
   int64_t ids[4];
@@ -149,8 +149,8 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   const auto edge_anew = [&](int64_t s, int64_t pos, double* ke) __attribute__((noinline)) {
     const int64_t p = s >> 1, q = nb_e_[pos];
     const V e = at(z, q) - at(z, p);
-    edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / c_.edge_rest[s],
-              c_.edge_width[s], ke);
+    edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / rest_e_[pos],
+              width_e_[pos], ke);
   };
   auto edge = [&](int64_t s, int64_t pos) {
     double mine[kKgEdge];
@@ -170,7 +170,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
       triple_ids(s, pos, ids);
       V g[3];
       bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
-      kept_bend(c_.triple_width[s] * k_slope_t_[pos] / c_.triple_rest[s], g, kg);
+      kept_bend(width_t_[pos] * k_slope_t_[pos] / rest_t_[pos], g, kg);
     }
     const int32_t* l = &lo_t_[3 * pos];
     const V vk[3] = {at(v, l[0]), at(v, l[1]), at(v, l[2])};
@@ -187,7 +187,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
       const CellAt a = cell_at(ids, z);
       V g[4];
       shear_cell<double, false>(a.x, g);
-      kept_gradients(c_.shear_area[s] * k_slope_s_[pos], g, 4, kg);
+      kept_gradients(area_s_[pos] * k_slope_s_[pos], g, 4, kg);
     }
     const int32_t* l = &lo_s_[4 * pos];
     const V vk[4] = {at(v, l[0]), at(v, l[1]), at(v, l[2]), at(v, l[3])};
@@ -238,11 +238,11 @@ void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z, double* ke
   const int64_t p = s >> 1, q = nb_e_[pos];
   V g[2];
   const double len = edge_length(at(z, p), at(z, q), g);
-  const double L0 = c_.edge_rest[s];
+  const double L0 = rest_e_[pos];
   const Band::Stop st = m_.stretch[s & 1].stop(anc_e_[pos], len / L0 - 1);
   const double tension = std::max(0.0, st.f);
   if (!keep_) k_tension_[pos] = tension, k_slope_e_[pos] = st.df_dq;  // the products' (keeping: ke's)
-  edge_kept(z + 3 * p, z + 3 * q, len, tension, st.df_dq / L0, c_.edge_width[s], ke);
+  edge_kept(z + 3 * p, z + 3 * q, len, tension, st.df_dq / L0, width_e_[pos], ke);
 }
 
 void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -251,10 +251,10 @@ void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* 
   V g[3];
   const double th =
       bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
-  const double Lm = c_.triple_rest[s];
+  const double Lm = rest_t_[pos];
   const double slope = m_.bend[s & 1].stop(anc_t_[pos], th / Lm).df_dq;
   if (!keep_) k_slope_t_[pos] = slope;
-  kept_bend(c_.triple_width[s] * slope / Lm, g, kg);
+  kept_bend(width_t_[pos] * slope / Lm, g, kg);
 }
 
 void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -265,7 +265,7 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
   const double phi = shear_cell(a.x, g);
   const double slope = m_.shear.stop(anc_s_[pos], phi).df_dq;
   if (!keep_) k_slope_s_[pos] = slope;
-  kept_gradients(c_.shear_area[s] * slope, g, 4, kg);
+  kept_gradients(area_s_[pos] * slope, g, 4, kg);
 }
 
 // The diagonal of K: per element and particle, its stiffness block's
