@@ -41,6 +41,7 @@ double closest_pair(const Simulation& w, double pair_distance) {
 
 struct Dropped {
   double closest, pair_distance;
+  double listed_closest;  // SelfContact::closest: the pair list's nearest pair (report.json's min_distance)
   std::vector<double> z;
   bool all_converged = true;
 };
@@ -63,6 +64,7 @@ Dropped drop(bool self_contact, int threads = 1, double end = 0.4, double gap_in
            (long long)w.loop->evaluator().self_contact().listed(), w.cloth.time);
   out.pair_distance = 2 * w.model.contact.thickness;
   out.closest = closest_pair(w, out.pair_distance);
+  out.listed_closest = w.loop->evaluator().self_contact().closest(w.lists.particles, w.cloth.z.data());
   out.z = w.cloth.z;
   omp_set_num_threads(1);
   return out;
@@ -83,6 +85,7 @@ TEST(SelfContact, FoldedStripRestsOnItself) {
   if (getenv("DRAPE_DEBUG_SELF")) printf("closest %g / %g, without %g\n", with.closest, with.pair_distance, without.closest);
   EXPECT_LT(without.closest, 0.75 * without.pair_distance)
       << "without self-contact the flap should pass through the lower half";
+  EXPECT_EQ(without.listed_closest, HUGE_VAL) << "no pair list without self-contact";
 }
 
 // The flap starts just above the lower half (1.02 D), so that pairs come
@@ -98,6 +101,9 @@ TEST(SelfContact, FoldedStripRestsOnItselfWithMultigrid) {
 TEST(SelfContact, SameBitsOnOneAndTwoThreads) {
   const Dropped one = drop(true, 1, 0.05, 1.02), two = drop(true, 2, 0.05, 1.02);
   EXPECT_LT(one.closest, one.pair_distance) << "pairs should be in contact";
+  // Within the pair distance the list's nearest pair is the nearest of all.
+  EXPECT_EQ(one.listed_closest, one.closest);
+  EXPECT_EQ(two.listed_closest, one.closest);
   ASSERT_EQ(one.z.size(), two.z.size());
   EXPECT_EQ(std::memcmp(one.z.data(), two.z.data(), one.z.size() * sizeof(double)), 0);
 }

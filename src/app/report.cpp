@@ -109,6 +109,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("pair_builds", (long long)s.pair_builds)
       .value("pairs_listed", (long long)s.pairs_listed)
       .value("contact_ghosts", (long long)s.contact_ghosts)
+      .value("pair_distance", s.pair_distance)
+      .value("min_distance", s.closest_pair)  // null: no pairs listed
       .end_object();
   j.value("particles_solved", (long long)free_particles);
   j.value("final_spacing", s.final_spacing);

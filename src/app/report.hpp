@@ -3,6 +3,7 @@
 // figures, the running summary, report.json and rank 0's closing tables.
 #include <mpi.h>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -89,6 +90,8 @@ struct Summary {
   double drag = 0;            // 1/s: the air drag the final mesh's steps ran with
   uint64_t pair_builds = 0;   // self-contact: times the pair list was built
   int64_t pairs_listed = 0;   // self-contact: pairs in the last list (each counted at both particles)
+  double pair_distance = 0;   // self-contact: the pair distance D of the final mesh
+  double closest_pair = HUGE_VAL;  // self-contact: the least distance between listed partners at the end
   int64_t contact_ghosts = 0; // self-contact: other ranks' particles hashed at the last build, over ranks
   double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
                               // (with AMRC, the finest leaf's)

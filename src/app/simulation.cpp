@@ -64,8 +64,9 @@ void Simulation::refuse_unsupported() const {
     throw InputError("solver.gradient = \"numeric\" runs on one rank only (its difference windows "
                      "reach beyond the ghost particles); run it without mpirun");
   if (sv.self_contact && numeric)
-    throw InputError("solver.self_contact = true needs solver.gradient = \"analytic\" (the difference "
-                     "windows do not reach a particle's contact partners)");
+    throw InputError("solver.self_contact = true (the default) needs solver.gradient = \"analytic\" (the "
+                     "difference windows do not reach a particle's contact partners); set "
+                     "solver.self_contact = false for the numeric gradient");
   if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && scene.amrc.enabled)
     throw InputError("solver.preconditioner = \"multigrid\" with amrc.enabled = true runs on one rank only "
                      "(K's rows do not yet reach another rank's hanging particles); run it without mpirun "
@@ -73,7 +74,7 @@ void Simulation::refuse_unsupported() const {
   if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && sv.self_contact)
     throw InputError("solver.preconditioner = \"multigrid\" with solver.self_contact = true runs on one rank "
                      "only (K's contact blocks across ranks are not yet checked against one rank's); run it "
-                     "without mpirun or use \"jacobi\"");
+                     "without mpirun, use \"jacobi\" or set solver.self_contact = false");
 }
 
 // `auto` takes the multigrid on fine meshes where it may run: on several
@@ -113,8 +114,9 @@ void Simulation::set_up_mesh() {
 
 void Simulation::set_up_tree(int start_level) {
   const CheckpointState* ck = opt_.restart;
+  // The near-sheet search's room only where AMRC adapts (grid sequencing never does).
   amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level_,
-                                scene.solver.self_contact);
+                                scene.amrc.enabled && scene.solver.self_contact);
   if (ck && !ck->amrc_levels.empty()) {
     amrc->restore(ck->amrc_levels);
     if (sequence_level_ > 0) sequence_level_ = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];

@@ -156,6 +156,11 @@ void Simulation::summarise() {
   sum_.pair_builds = loop->evaluator().self_contact().builds();
   sum_.pairs_listed = red().sum_i64(loop->evaluator().self_contact().listed());  // each rank lists its own
   sum_.contact_ghosts = red().sum_i64(loop->evaluator().self_contact().contact_ghosts());
+  // How close the cloth came to itself: the final list's nearest pair at
+  // the final positions (the last evaluation's, so the partners' are current).
+  const SelfContact& sc = loop->evaluator().self_contact();
+  sum_.pair_distance = sc.distance();
+  sum_.closest_pair = -red().max(-sc.closest(loop->evaluator().lists().particles, cloth.z.data()));
   // The final mesh's spacing: the uniform mesh's when sequencing, the finest
   // leaf's with AMRC (every rank holds the whole tree), else the grid's.
   int finest_leaf = sequence_level_;

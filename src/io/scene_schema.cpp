@@ -153,7 +153,8 @@ void declare_solver(ParameterList& list) {
            "cloth-cloth contact: two particles that are not mesh neighbours keep twice the contact layer "
            "apart ([design.md §1](design.md#1-the-cloth-model)) on any number of ranks; with AMRC, leaves "
            "near another part of the cloth split to the finest level "
-           "([design.md §2](design.md#2-amrc-and-grid-sequencing)); `solver.gradient = \"analytic\"`").example("true")
+           "([design.md §2](design.md#2-amrc-and-grid-sequencing)); needs `solver.gradient = \"analytic\"`, and one "
+           "rank with `solver.preconditioner = \"multigrid\"`: false for those").example("false")
       .add("memory", &SolverSpec::memory, "", non_negative(), "weight of the force memory (hysteresis) term",
            "weight of the memory term that pulls each force to its hysteresis target").example("0.5")
       .add("drag", &SolverSpec::drag, "1/s", non_negative(), "1/s: air drag, a force -drag*m*v on each particle",

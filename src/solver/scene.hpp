@@ -79,7 +79,7 @@ struct SolverSpec {
   double drag = 0.0;            // 1/s: air drag -drag*m*v in each particle's Newton equation
   double rest_speed = 0.01;     // m/s; > 0 ends the run once max speed is below it (3 steps)
   double contact_thickness = 0.0;  // m; 0 = automatic (half the spacing; a coarse stage: half its cell diagonal)
-  bool self_contact = false;    // cloth-cloth contact between particles that are not mesh neighbours
+  bool self_contact = true;     // cloth-cloth contact between particles that are not mesh neighbours
   // Weight of the memory term 1/2 mu |(f - f_history) lambda / F0|^2: inside a
   // KES band a force costs nothing, so without it the minimum is not unique;
   // with it each force is pulled to its hysteresis target (Band::stop): the

@@ -245,6 +245,22 @@ void SelfContact::add_product(int64_t p, const double* x, const double* v, doubl
   });
 }
 
+double SelfContact::closest(const ActiveList& particles, const double* x) const {
+  const int64_t n = particles.size();
+  const int64_t* items = particles.items.data();
+  double least = HUGE_VAL;  // a min over pairs: exact in any order
+#pragma omp parallel for schedule(static) reduction(min : least)
+  for (int64_t k = 0; k < n; ++k) {
+    const int64_t p = items[k];
+    for_partners(p, [&](int64_t q) {
+      double d2 = 0;
+      for (int i = 0; i < 3; ++i) d2 += (x[3 * p + i] - x[3 * q + i]) * (x[3 * p + i] - x[3 * q + i]);
+      least = std::min(least, std::sqrt(d2));
+    });
+  }
+  return least;
+}
+
 double SelfContact::slope_sum(int64_t p, const double* x) const {
   double s = 0;
   for_partners(p, [&](int64_t q) {

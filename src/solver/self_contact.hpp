@@ -92,6 +92,10 @@ class SelfContact {
     }
     return missing;
   }
+  // The least distance at x between a listed particle and one of its
+  // partners (infinity with no pairs): exact while below the pair distance
+  // (every such pair is listed), at least it otherwise. This rank's own.
+  double closest(const ActiveList& particles, const double* x) const;
   // Sum of the pairs' slopes at p (the trace of K's diagonal block).
   double slope_sum(int64_t p, const double* x) const;
   // K's blocks of row p: block(q, b) with b = slope n n^T for q = p and -b
