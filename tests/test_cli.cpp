@@ -575,7 +575,7 @@ TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
   EXPECT_EQ(report_field(j, "method"), "\"newton\"");
   EXPECT_EQ(report_field(j, "preconditioner"), "\"jacobi\"");
   EXPECT_EQ(report_field(j, "drag"), "10");
-  EXPECT_EQ(report_field(j, "pair_builds"), "0");  // self-contact off: no pair list
+  EXPECT_EQ(report_field(j, "pair_builds"), "1");  // self-contact on by default: its list built once in three steps
   EXPECT_EQ(report_field(j, "stage_drag"), "10");
   EXPECT_EQ(report_field(j, "particles_solved"), "1089");
   EXPECT_EQ(report_field(j, "final_spacing"), "0.03125");
