@@ -46,10 +46,11 @@ struct Outcome {
 int64_t pairs_in_contact(const Simulation& w) {
   const SelfContact& sc = w.loop->evaluator().self_contact();
   int64_t n = 0;
-  for (int64_t p : w.lists.particles.items)
-    sc.for_partners(p, [&](int64_t q) {
+  const std::vector<int64_t>& items = w.lists.particles.items;
+  for (size_t k = 0; k < items.size(); ++k)
+    sc.for_partners(int64_t(k), [&](int64_t q) {
       PairTerm t;
-      n += sc.term(w.cloth.z.data(), p, q, t);
+      n += sc.term(w.cloth.z.data(), items[k], q, t);
     });
   return n;
 }

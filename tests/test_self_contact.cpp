@@ -126,10 +126,11 @@ std::unique_ptr<Simulation> pressed_world(unsigned seed) {
 int pairs_in_contact(const Simulation& w) {
   const SelfContact& sc = w.loop->evaluator().self_contact();
   int n = 0;
-  for (int64_t p : w.lists.particles.items)
-    sc.for_partners(p, [&](int64_t q) {
+  const std::vector<int64_t>& items = w.lists.particles.items;
+  for (size_t k = 0; k < items.size(); ++k)
+    sc.for_partners(int64_t(k), [&](int64_t q) {
       PairTerm t;
-      n += sc.term(w.cloth.z.data(), p, q, t);
+      n += sc.term(w.cloth.z.data(), items[k], q, t);
     });
   return n;
 }
@@ -186,8 +187,10 @@ TEST(SelfContact, AssembledStiffnessMatchesTheProduct) {
   plain.loop->evaluator().settled_cost(plain.cloth.z.data());
   plain.loop->evaluator().stiffness_diagonal(plain.cloth.z.data(), dplain.data());
   const SelfContact& sc = ev.self_contact();
-  for (int64_t p : ids)
-    EXPECT_NEAR(diag[3 * p] - dplain[3 * p], sc.slope_sum(p, w.cloth.z.data()) / 3, 1e-12 * diag[3 * p]);
+  for (size_t k = 0; k < ids.size(); ++k) {
+    const int64_t p = ids[k];
+    EXPECT_NEAR(diag[3 * p] - dplain[3 * p], sc.slope_sum(int64_t(k), p, w.cloth.z.data()) / 3, 1e-12 * diag[3 * p]);
+  }
 }
 
 // The pair list does not depend on when it was built: one built at the

@@ -186,8 +186,8 @@ void HaloExchange::clear_contact() const {
   ++version_;  // plan() lists the contact plan too
 }
 
-void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, double* x,
-                                std::vector<int64_t>& ghosts) const {
+void HaloExchange::plan_contact(const std::vector<int64_t>& own, const double* own_x, double reach,
+                                std::vector<int64_t>& ghosts, std::vector<double>& ghost_x) const {
   const double t0 = MPI_Wtime();
   int me = 0, size = 1;
   MPI_Comm_rank(comm_, &me);
@@ -195,17 +195,20 @@ void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, d
   // This rank's box about its free particles, inflated by the reach (none: empty).
   const double inf = std::numeric_limits<double>::infinity();
   double box[6] = {inf, inf, inf, -inf, -inf, -inf};
-  for (int64_t p : own)
+  for (size_t k = 0; k < own.size(); ++k)
     for (int i = 0; i < 3; ++i) {
-      box[i] = std::min(box[i], x[3 * p + i]);
-      box[3 + i] = std::max(box[3 + i], x[3 * p + i]);
+      box[i] = std::min(box[i], own_x[3 * k + i]);
+      box[3 + i] = std::max(box[3 + i], own_x[3 * k + i]);
     }
   for (int i = 0; i < 3; ++i) box[i] -= reach, box[3 + i] += reach;
   boxes_.resize(6 * size_t(size));
   MPI_Allgather(box, 6, MPI_DOUBLE, boxes_.data(), 6, MPI_DOUBLE, comm_);
-  // Each other rank gets this rank's particles inside its box, ascending.
-  sorted_.assign(own.begin(), own.end());
-  std::sort(sorted_.begin(), sorted_.end());
+  // Each other rank gets this rank's particles inside its box, ascending
+  // (sorted_: their places in own, by id).
+  sorted_.resize(own.size());
+  for (size_t k = 0; k < own.size(); ++k) sorted_[k] = int64_t(k);
+  std::sort(sorted_.begin(), sorted_.end(), [&](int64_t a, int64_t b) { return own[size_t(a)] < own[size_t(b)]; });
+  std::vector<int64_t> sent_at;  // per contact send, its place in own (the positions' message)
   contact_.resize(size_t(size));
   clear_contact();
   std::vector<int> nsend(size_t(size), 0), nrecv(size_t(size), 0);
@@ -214,11 +217,11 @@ void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, d
     peer.rank = r;
     if (r == me) continue;
     const double* b = &boxes_[6 * size_t(r)];
-    for (int64_t p : sorted_) {
-      const double* xp = x + 3 * p;
+    for (int64_t k : sorted_) {
+      const double* xp = own_x + 3 * k;
       bool inside = true;
       for (int i = 0; i < 3; ++i) inside = inside && xp[i] >= b[i] && xp[i] <= b[3 + i];
-      if (inside) peer.send.push_back(p);
+      if (inside) peer.send.push_back(own[size_t(k)]), sent_at.push_back(k);
     }
     nsend[size_t(r)] = int(peer.send.size());
     contact_sends_ += int64_t(peer.send.size());
@@ -231,30 +234,39 @@ void HaloExchange::plan_contact(const std::vector<int64_t>& own, double reach, d
   req_.resize(2 * (peers_.size() + contact_.size()));
   const Round near{contact_, csbuf_, crbuf_, 0x4a11};
   int posted = post_receives(near, 4, req_.data());
+  size_t at = 0;
   for (int r = 0; r < size; ++r) {
     std::vector<double>& b = csbuf_[size_t(r)];
     b.clear();
     for (int64_t p : contact_[size_t(r)].send) {
       b.push_back(double(p));
-      for (int i = 0; i < 3; ++i) b.push_back(x[3 * p + i]);
+      for (int i = 0; i < 3; ++i) b.push_back(own_x[3 * sent_at[at] + i]);
+      ++at;
     }
     if (b.empty()) continue;
     MPI_Isend(b.data(), int(b.size()), MPI_DOUBLE, r, near.tag, comm_, &req_[posted++]);
     bytes += int64_t(b.size() * sizeof(double));
   }
   MPI_Waitall(posted, req_.data(), MPI_STATUSES_IGNORE);
-  ghosts.clear();
+  // The ghosts ascending, each with its position (ids are unique: each
+  // particle is free on one rank).
+  std::vector<std::pair<int64_t, const double*>> got;
   for (int r = 0; r < size; ++r) {
     Peer& peer = contact_[size_t(r)];
     const std::vector<double>& b = crbuf_[size_t(r)];
     for (size_t k = 0; k < peer.recv.size(); ++k) {
       const int64_t p = int64_t(b[4 * k]);
       peer.recv[k] = p;
-      for (int i = 0; i < 3; ++i) x[3 * p + i] = b[4 * k + 1 + i];
-      ghosts.push_back(p);
+      got.emplace_back(p, &b[4 * k + 1]);
     }
   }
-  std::sort(ghosts.begin(), ghosts.end());
+  std::sort(got.begin(), got.end());
+  ghosts.resize(got.size());
+  ghost_x.resize(3 * got.size());
+  for (size_t k = 0; k < got.size(); ++k) {
+    ghosts[k] = got[k].first;
+    for (int i = 0; i < 3; ++i) ghost_x[3 * k + i] = got[k].second[i];
+  }
   seconds += MPI_Wtime() - t0;
 }
 

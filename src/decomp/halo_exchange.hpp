@@ -36,8 +36,8 @@ class HaloExchange : public Halo {
 
   void exchange(double* z, int blocks) const override;
   void exchange_particles(double* a, int per) const override;
-  void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
-                    std::vector<int64_t>& ghosts) const override;
+  void plan_contact(const std::vector<int64_t>& own, const double* own_x, double reach,
+                    std::vector<int64_t>& ghosts, std::vector<double>& ghost_x) const override;
   void keep_contact(const std::vector<int64_t>& kept) const override;
   // The tile plan's particles, then the contact plan's (sent, then received).
   void plan(const std::function<void(int64_t, bool)>& f) const override;

@@ -104,7 +104,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(column(hx_[e].row), w * hx_[e].w, blk);
     // fixed, or (one rank's columns) another rank's: no unknown of this rank behind it
   };
-  auto one = [&](int64_t p, const GatherRow& g, const double* kc, double mass, double w) {
+  auto one = [&](int64_t p, int64_t pos, const GatherRow& g, const double* kc, double mass, double w) {
     double blk[9] = {mass, 0, 0, 0, mass, 0, 0, 0, mass};
     if (kc[3] > 0) {  // contact: slope n n^T, n the force's direction
       const double s = kc[4] / (kc[3] * kc[3]);
@@ -113,7 +113,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
     }
     friction_block(m_.contact, k_z_ + 3 * p, &c_.x1[3 * p], blk);
     columns(p, w, blk);
-    if (m_.self_contact) self_.blocks(p, k_z_, [&](int64_t q, const double* b) { columns(q, w, b); });
+    if (m_.self_contact) self_.blocks(pos, p, k_z_, [&](int64_t q, const double* b) { columns(q, w, b); });
     const int32_t* at = g.at;
     for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
       for (int k = 0; k < 2; ++k)
@@ -152,10 +152,10 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
         rank_one(&kg_s_[kKgCell * pos], 4, int(part), ids, w, columns);
       }
   };
-  one(lists_.particles.items[r], rows_[r], &kc_[kKc * r], kc_[kKc * r + 5], 1.0);
+  one(lists_.particles.items[r], r, rows_[r], &kc_[kKc * r], kc_[kKc * r + 5], 1.0);
   for (int64_t e = ht_start_[r]; e < ht_start_[r + 1]; ++e) {
     const size_t k = size_t(ht_[e].row);
-    one(lists_.hanging[k].h, hanging_row(k), &kc_[kKc * (np + k)], 0.0, ht_[e].w);  // no mass at h
+    one(lists_.hanging[k].h, -1, hanging_row(k), &kc_[kKc * (np + k)], 0.0, ht_[e].w);  // no mass at h
   }
 }
 

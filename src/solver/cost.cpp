@@ -123,6 +123,9 @@ void Evaluator::fit_arrays(bool exact) {
   each(nb_t_, nt, 2, mt, int32_t(-1));
   each(nb_s_, ns, 3, ms, int32_t(-1));
   if (local_on_) fit_local_tables(exact);
+  // Self-contact's arrays from its first build on (none before: a mesh that
+  // is never stepped holds none).
+  if (m_.self_contact && self_.builds() > 0) self_.fit_to_lists(lists_.particles, int64_t(n), exact);
   // Axes and anchors last from one step's start to the next: kept while the
   // lists stay (a new capacity for the same lists: keep_products).
   fit_keeping(axis_t_, 3 * nt, 3 * mt, exact, 0.0);
@@ -743,7 +746,7 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
 
 // ---- pass 2: Newton residual per free particle ---------------------------
 
-double Evaluator::particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho,
+double Evaluator::particle_residual(int64_t p, int64_t pos, const GatherRow& row, const double* z, double* rho,
                                     const InertiaTerms& it, const double* passed) {
   if (!m_.use_newton) {
     rho[0] = rho[1] = rho[2] = 0;
@@ -757,7 +760,7 @@ double Evaluator::particle_residual(int64_t p, const GatherRow& row, const doubl
   double fc[3];
   contact_force(m_.contact, x, fc);
   friction_force(m_.contact, x, x1, fc);
-  if (m_.self_contact) self_.add_force(p, z, fc);
+  if (m_.self_contact) self_.add_force(pos, p, z, fc);
   double r[3];
   for (int k = 0; k < 3; ++k)
     r[k] = mass * (ca * (x[k] - x1[k] - ratio * (x1[k] - x2[k])) + cd * (x[k] - x1[k]) - m_.gravity[k]) -
@@ -886,7 +889,7 @@ void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, 
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
-    if (m_.self_contact) self_.add_jtr(p, z, rho_grid_.data(), jtr);
+    if (m_.self_contact) self_.add_jtr(pos, p, z, rho_grid_.data(), jtr);
     const double mca = c_.mass[p] * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
@@ -934,7 +937,7 @@ CostTerms Evaluator::cost_pass(double* z, double* settle, bool grid) {
                           [&](const ItemRun& run) { shear_forces(run, z, settle); }, [&] { hanging_forces(z); },
                           [&](int64_t p, int64_t pos) {
                             double* rho = &rho_[3 * pos];
-                            cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it, passed_force(pos));
+                            cost_p_[pos] = particle_residual(p, pos, rows_[pos], z, rho, it, passed_force(pos));
                             if (grid) std::copy(rho, rho + 3, &rho_grid_[3 * p]);
                           });
   clear_hanging(hres_);
@@ -1042,7 +1045,7 @@ CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
   auto cost_s = [&](const ItemRun& run) { shear_forces(run, z, nullptr); };
   auto residual = [&](int64_t p, int64_t pos) {
     double* rho = &rho_[3 * pos];
-    cost_p_[pos] = particle_residual(p, rows_[pos], z, rho, it, passed_force(pos));
+    cost_p_[pos] = particle_residual(p, pos, rows_[pos], z, rho, it, passed_force(pos));
     std::copy(rho, rho + 3, &rho_grid_[3 * p]);
   };
   auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
@@ -1273,7 +1276,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     slope += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
-    if (m_.self_contact) slope += self_.slope_sum(p, z) / 3;
+    if (m_.self_contact) slope += self_.slope_sum(pos, p, z) / 3;
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather_diagonal(rows_[pos], dsum);
@@ -1314,7 +1317,10 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 2); j <= std::min(gr.nj - 1, jc + 2); ++j) {
       const int64_t p = gr.id(i, j);
       double rho[3];  // scratch: the window's own
-      if (c_.free(p)) sum += particle_residual(p, row_of(p), z, rho, inertia_terms(), passed_force(list_position(p)));
+      if (c_.free(p)) {
+        const int64_t pos = list_position(p);
+        sum += particle_residual(p, pos, row_of(p), z, rho, inertia_terms(), passed_force(pos));
+      }
       for (int d = 0; d < 2; ++d) {
         if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
         if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];

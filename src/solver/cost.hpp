@@ -313,9 +313,10 @@ class Evaluator {
   InertiaTerms inertia_terms() const {
     return {m_.accel_coeff(), m_.dt / m_.dt_prev, m_.drag / m_.dt, 1.0 / m_.force_scale, m_.inertia_coeff()};
   }
-  // Particle p's scaled residual into rho (3); returns its Newton cost.
-  double particle_residual(int64_t p, const GatherRow& row, const double* z, double* rho, const InertiaTerms& it,
-                           const double* passed);
+  // Particle p's (at list position pos) scaled residual into rho (3);
+  // returns its Newton cost.
+  double particle_residual(int64_t p, int64_t pos, const GatherRow& row, const double* z, double* rho,
+                           const InertiaTerms& it, const double* passed);
   // The force hanging particles pass on to the particle at list position
   // pos (zeros where none; nullptr without hanging links).
   const double* passed_force(int64_t pos) const {

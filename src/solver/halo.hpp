@@ -22,18 +22,19 @@ class Halo {
   // The same for an array of `per` values per particle (residuals).
   virtual void exchange_particles(double* a, int per) const = 0;
   // Contact ghosts (self-contact's partners on other ranks, docs/design.md
-  // §1): from the positions x (3 per particle) of this rank's free
-  // particles `own`, lists in `ghosts` (ascending) every free particle of
-  // another rank within `reach` of one of them, and perhaps some further,
-  // and writes their positions into x. From then on, until the next plan or
+  // §1): from the positions own_x (3 per particle, own's order) of this
+  // rank's free particles `own`, lists in `ghosts` (ascending) every free
+  // particle of another rank within `reach` of one of them, and perhaps
+  // some further, and their positions in ghost_x (3 each, ghosts' order). From then on, until the next plan or
   // a new tile plan, exchange (with kPositions), exchange_particles and
   // exchange_at refresh them too (they are in plan()'s lists, and
   // plan_version() changes with each plan). Collective over the ranks. One
   // rank: none.
-  virtual void plan_contact(const std::vector<int64_t>& own, double reach, double* x,
-                            std::vector<int64_t>& ghosts) const {
-    (void)own, (void)reach, (void)x;
+  virtual void plan_contact(const std::vector<int64_t>& own, const double* own_x, double reach,
+                            std::vector<int64_t>& ghosts, std::vector<double>& ghost_x) const {
+    (void)own, (void)own_x, (void)reach;
     ghosts.clear();
+    ghost_x.clear();
   }
   // Narrows the last plan to the contact ghosts `kept` (ascending, a subset
   // of its ghosts: the ones some particle of this rank reads) in the

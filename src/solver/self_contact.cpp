@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "solver/fit.hpp"
+
 namespace drape {
 
 namespace {
@@ -11,22 +13,32 @@ namespace {
 constexpr int64_t kReservedPartners = 4;
 }  // namespace
 
-void SelfContact::size_arrays(int64_t n) {
-  if (int64_t(count_.size()) == n) return;
-  xb_.assign(3 * n, 0.0);
-  first_.assign(n, 0);
-  count_.assign(n, 0);
-  ids_.assign(kReservedPartners * n, 0);
-  lo_.assign(kReservedPartners * n, -1);
+// Sized by the list, as the evaluator's arrays (fit.hpp), at most the
+// grid's n. What the last build holds is kept: a new capacity for the same
+// lists needs no new build.
+void SelfContact::fit_to_lists(const ActiveList& particles, int64_t n, bool exact) {
+  const size_t np = size_t(particles.size()), most = size_t(n);
+  fit_keeping(xb_, 3 * np, 3 * most, exact, 0.0);
+  fit_keeping(first_, np, most, exact, int64_t(0));
+  fit_keeping(count_, np, most, exact, int32_t(0));
+  const size_t partners = std::max(size_t(listed_), size_t(kReservedPartners) * np);
+  fit_keeping(ids_, partners, size_t(kReservedPartners) * most, exact, int32_t(0));
+  fit_keeping(lo_, partners, size_t(kReservedPartners) * most, exact, int32_t(-1));
+  if (exact) std::vector<double>().swap(gx_);  // the contact ghosts': sized by the halo at a build
+  fit_hash(int64_t(np), n, exact);
+}
+
+void SelfContact::fit_hash(int64_t hashed, int64_t n, bool exact) {
   int64_t buckets = 1;
-  while (buckets < 2 * n) buckets *= 2;  // a power of two: the hash masks
-  bucket_start_.assign(buckets + 1, 0);
-  bucket_items_.assign(n, 0);
+  while (buckets < 2 * hashed) buckets *= 2;  // a power of two: the hash masks
+  fit(bucket_start_, size_t(buckets + 1), size_t(4 * n + 1), exact, int32_t(0));
+  fit(bucket_items_, size_t(hashed), size_t(n), exact, int32_t(0));
 }
 
 void SelfContact::memory(MemoryTable& t) const {
   const char* o = "SelfContact";
   t.add(o, "build positions", xb_);
+  t.add(o, "contact ghosts' build positions", gx_);
   t.add(o, "partner offsets and counts", first_.capacity() * sizeof(int64_t) + count_.capacity() * sizeof(int32_t));
   t.add(o, "partners", ids_);
   t.add(o, "partners' own-numbering indices", lo_);
@@ -36,7 +48,9 @@ void SelfContact::memory(MemoryTable& t) const {
 
 bool SelfContact::refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact,
                           const double* x, const Reducer& red, const Halo& halo) {
-  size_arrays(c.grid.n());
+  // The first build's sizes are its lists' (as a new stage's: fit_to_lists
+  // with exact); later list changes grow them where short.
+  if (builds_ == 0 || stamp != stamp_) fit_to_lists(particles, c.grid.n(), builds_ == 0);
   const bool same_layer = contact.thickness == contact_.thickness && contact.stiffness == contact_.stiffness;
   // One decision for all ranks (the build is collective): the largest move,
   // or infinity where a rank's lists or the layer changed.
@@ -67,7 +81,7 @@ double SelfContact::worst_move(const ActiveList& particles, const double* x) con
     const int64_t p = items[k];
     double d2 = 0;
     for (int i = 0; i < 3; ++i) {
-      const double u = x[3 * p + i] - xb_[3 * p + i];
+      const double u = x[3 * p + i] - xb_[3 * k + i];
       d2 += u * u;
     }
     worst = std::max(worst, d2);
@@ -90,33 +104,30 @@ int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
 void SelfContact::hash_particles(const ActiveList& particles) {
   // Buckets for these particles (a coarse stage has far fewer than the
   // grid the arrays were sized for): a power of two, at least twice them.
-  const int64_t hashed = particles.size() + int64_t(ghosts_.size());
+  const int64_t hashed = own_ + int64_t(ghosts_.size());
   buckets_ = 1;
   while (buckets_ < 2 * hashed) buckets_ *= 2;
   int32_t* start = bucket_start_.data();
   std::fill(start, start + buckets_ + 1, 0);
   int64_t cell[3];
-  auto count = [&](int64_t p) {
-    cell_of(&xb_[3 * p], cell);
+  for (int64_t h = 0; h < hashed; ++h) {
+    cell_of(built_at(h), cell);
     ++start[bucket_of(cell[0], cell[1], cell[2]) + 1];
-  };
-  auto place = [&](int64_t p) {
-    cell_of(&xb_[3 * p], cell);
-    bucket_items_[start[bucket_of(cell[0], cell[1], cell[2])]++] = int32_t(p);
-  };
-  for (int64_t p : particles.items) count(p);
-  for (int64_t p : ghosts_) count(p);
+  }
   for (int64_t b = 1; b <= buckets_; ++b) start[b] += start[b - 1];
-  for (int64_t p : particles.items) place(p);
-  for (int64_t p : ghosts_) place(p);
+  for (int64_t h = 0; h < hashed; ++h) {
+    cell_of(built_at(h), cell);
+    bucket_items_[start[bucket_of(cell[0], cell[1], cell[2])]++] = int32_t(h);
+  }
   for (int64_t b = buckets_; b > 0; --b) start[b] = start[b - 1];  // back to each bucket's start
   start[0] = 0;
 }
 
 template <class F>
-void SelfContact::candidates(const Cloth& c, int64_t p, F&& f) const {
+void SelfContact::candidates(const Cloth& c, const ActiveList& particles, int64_t pos, F&& f) const {
   const Grid& g = c.grid;
-  const double* xp = &xb_[3 * p];
+  const int64_t p = particles.items[size_t(pos)];
+  const double* xp = &xb_[3 * pos];
   int64_t home[3], at[3];
   cell_of(xp, home);
   const int ip = g.i_of(p), jp = g.j_of(p);
@@ -126,9 +137,10 @@ void SelfContact::candidates(const Cloth& c, int64_t p, F&& f) const {
         const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
         const int64_t k = bucket_of(cx, cy, cz);
         for (int32_t s = bucket_start_[k]; s < bucket_start_[k + 1]; ++s) {
-          const int64_t q = bucket_items_[s];
-          if (q == p) continue;
-          const double* xq = &xb_[3 * q];
+          const int64_t h = bucket_items_[s];
+          if (h == pos) continue;
+          const int64_t q = h < own_ ? particles.items[size_t(h)] : ghosts_[size_t(h - own_)];
+          const double* xq = built_at(h);
           cell_of(xq, at);
           if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
           const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
@@ -143,26 +155,24 @@ void SelfContact::candidates(const Cloth& c, int64_t p, F&& f) const {
 void SelfContact::build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo) {
   const int64_t n = particles.size();
   const int64_t* items = particles.items.data();
-  // A particle outside the list has no partners: cleared when the list
-  // changes (the listed ones are all written below).
-  if (stamp_ != counted_stamp_) std::fill(count_.begin(), count_.end(), 0);
-  counted_stamp_ = stamp_;
+  own_ = n;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k)
-    for (int i = 0; i < 3; ++i) xb_[3 * items[k] + i] = x[3 * items[k] + i];
-  // Other ranks' particles within reach, and their positions into xb_.
-  halo.plan_contact(particles.items, reach_, xb_.data(), ghosts_);
+    for (int i = 0; i < 3; ++i) xb_[3 * k + i] = x[3 * items[k] + i];
+  // Other ranks' particles within reach, and their positions into gx_.
+  halo.plan_contact(particles.items, xb_.data(), reach_, ghosts_, gx_);
+  fit_hash(n + int64_t(ghosts_.size()), c.grid.n(), false);
   hash_particles(particles);
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
     int32_t m = 0;
-    candidates(c, items[k], [&](int64_t) { ++m; });
-    count_[items[k]] = m;
+    candidates(c, particles, k, [&](int64_t) { ++m; });
+    count_[k] = m;
   }
   int64_t total = 0;
   for (int64_t k = 0; k < n; ++k) {
-    first_[items[k]] = total;
-    total += count_[items[k]];
+    first_[k] = total;
+    total += count_[k];
   }
   if (total > int64_t(ids_.size())) {
     ids_.resize(size_t(total + total / 2));
@@ -171,10 +181,9 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
   listed_ = total;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
-    const int64_t p = items[k];
-    int32_t* out = ids_.data() + first_[p];
+    int32_t* out = ids_.data() + first_[k];
     int32_t m = 0;
-    candidates(c, p, [&](int64_t q) { out[m++] = int32_t(q); });
+    candidates(c, particles, k, [&](int64_t q) { out[m++] = int32_t(q); });
     std::sort(out, out + m);  // the gather's fixed order: ascending global id
   }
   keep_partners(halo);
@@ -216,8 +225,8 @@ bool SelfContact::term(const double* x, int64_t p, int64_t q, PairTerm& t) const
   return true;
 }
 
-void SelfContact::add_force(int64_t p, const double* x, double* f) const {
-  for_partners(p, [&](int64_t q) {
+void SelfContact::add_force(int64_t pos, int64_t p, const double* x, double* f) const {
+  for_partners(pos, [&](int64_t q) {
     PairTerm t;
     if (!term(x, p, q, t)) return;
     for (int i = 0; i < 3; ++i) f[i] += t.f * t.n[i];
@@ -226,8 +235,8 @@ void SelfContact::add_force(int64_t p, const double* x, double* f) const {
 
 // dF_p/dx_p = J = -slope n n^T + (f/d)(I - n n^T) and dF_q/dx_p = -J, so the
 // gradient's part at p is -J (r_p - r_q).
-void SelfContact::add_jtr(int64_t p, const double* x, const double* r, double* jtr) const {
-  for_partners(p, [&](int64_t q) {
+void SelfContact::add_jtr(int64_t pos, int64_t p, const double* x, const double* r, double* jtr) const {
+  for_partners(pos, [&](int64_t q) {
     PairTerm t;
     if (!term(x, p, q, t)) return;
     double dr[3];
@@ -238,8 +247,8 @@ void SelfContact::add_jtr(int64_t p, const double* x, const double* r, double* j
   });
 }
 
-void SelfContact::add_product(int64_t p, const double* x, const double* v, double* out) const {
-  for_partners(p, [&](int64_t q) {
+void SelfContact::add_product(int64_t pos, int64_t p, const double* x, const double* v, double* out) const {
+  for_partners(pos, [&](int64_t q) {
     PairTerm t;
     if (term(x, p, q, t)) normal_product(t, v + 3 * p, v + 3 * q, out);
   });
@@ -252,7 +261,7 @@ double SelfContact::closest(const ActiveList& particles, const double* x) const 
 #pragma omp parallel for schedule(static) reduction(min : least)
   for (int64_t k = 0; k < n; ++k) {
     const int64_t p = items[k];
-    for_partners(p, [&](int64_t q) {
+    for_partners(k, [&](int64_t q) {
       double d2 = 0;
       for (int i = 0; i < 3; ++i) d2 += (x[3 * p + i] - x[3 * q + i]) * (x[3 * p + i] - x[3 * q + i]);
       least = std::min(least, std::sqrt(d2));
@@ -261,9 +270,9 @@ double SelfContact::closest(const ActiveList& particles, const double* x) const 
   return least;
 }
 
-double SelfContact::slope_sum(int64_t p, const double* x) const {
+double SelfContact::slope_sum(int64_t pos, int64_t p, const double* x) const {
   double s = 0;
-  for_partners(p, [&](int64_t q) {
+  for_partners(pos, [&](int64_t q) {
     PairTerm t;
     if (term(x, p, q, t)) s += t.slope;
   });

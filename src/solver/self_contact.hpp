@@ -43,37 +43,45 @@ class SelfContact {
   // particle moved more than a quarter of the search reach since the last
   // build (over all ranks: collective, through red and halo). Returns true
   // if it rebuilt; then the contact ghosts' entries of x are not yet
-  // current (the next exchange of positions brings them). Sizes its arrays
-  // at the first call.
+  // current (the next exchange of positions brings them). Its arrays hold
+  // the list's particles (by list position) and the contact ghosts, not the
+  // grid: fitted when the lists change (fit.hpp's rule, at most the grid).
   bool refresh(const Cloth& c, const ActiveList& particles, uint64_t stamp, const Contact& contact, const double* x,
                const Reducer& red, const Halo& halo = no_halo());
 
+  // Room for the particles of `particles` (a grid of n at most): grown
+  // where short, or with `exact` made their size (grid sequencing's next
+  // stage); refresh grows them too where the lists changed.
+  void fit_to_lists(const ActiveList& particles, int64_t n, bool exact);
   // The pair distance D (0 before the first refresh).
   double distance() const { return dist_; }
-  // Calls f(q) for each of p's listed partners, ascending global id.
+  // Calls f(q) for each listed partner of the particle at list position
+  // pos (none where pos < 0: a hanging particle), ascending global id.
   template <class F>
-  void for_partners(int64_t p, F&& f) const {
-    if (listed_ == 0) return;  // no pairs at all (no cache line of the per-particle arrays read)
-    const int32_t* q = ids_.data() + first_[p];
-    for (int k = 0; k < count_[p]; ++k) f(int64_t(q[k]));
+  void for_partners(int64_t pos, F&& f) const {
+    if (listed_ == 0 || pos < 0) return;  // no pairs at all (no cache line of the per-particle arrays read)
+    const int32_t* q = ids_.data() + first_[pos];
+    for (int k = 0; k < count_[pos]; ++k) f(int64_t(q[k]));
   }
   // The term of pair (p, q) at positions x; false (t untouched) when apart.
   bool term(const double* x, int64_t p, int64_t q, PairTerm& t) const;
 
+  // Below, p is a particle's grid id and pos its list position.
   // Adds the pairs' force on p to f.
-  void add_force(int64_t p, const double* x, double* f) const;
+  void add_force(int64_t pos, int64_t p, const double* x, double* f) const;
   // Adds -(dF/dx_p)^T r over the residuals of p and its partners (r: 3 per
   // particle): the self-contact part of the Newton cost's gradient at p.
-  void add_jtr(int64_t p, const double* x, const double* r, double* jtr) const;
+  void add_jtr(int64_t pos, int64_t p, const double* x, const double* r, double* jtr) const;
   // K's part at p (its positive semi-definite normal term): sum over pairs
   // of slope n n^T (v_p - v_q), added to out.
-  void add_product(int64_t p, const double* x, const double* v, double* out) const;
+  void add_product(int64_t pos, int64_t p, const double* x, const double* v, double* out) const;
   // The same with v in the own numbering (number_partners's): vp is p's 3
   // values, each partner's at its kept index.
-  void add_product_local(int64_t p, const double* x, const double* vp, const double* v, double* out) const {
+  void add_product_local(int64_t pos, int64_t p, const double* x, const double* vp, const double* v,
+                         double* out) const {
     if (listed_ == 0) return;
-    const int64_t at = first_[p];
-    for (int k = 0; k < count_[p]; ++k) {
+    const int64_t at = first_[pos];
+    for (int k = 0; k < count_[pos]; ++k) {
       PairTerm t;
       if (term(x, p, ids_[at + k], t)) normal_product(t, vp, v + 3 * int64_t(lo_[at + k]), out);
     }
@@ -97,13 +105,13 @@ class SelfContact {
   // (every such pair is listed), at least it otherwise. This rank's own.
   double closest(const ActiveList& particles, const double* x) const;
   // Sum of the pairs' slopes at p (the trace of K's diagonal block).
-  double slope_sum(int64_t p, const double* x) const;
+  double slope_sum(int64_t pos, int64_t p, const double* x) const;
   // K's blocks of row p: block(q, b) with b = slope n n^T for q = p and -b
   // for each partner q (every listed partner: a zero block when apart, so
   // the pattern changes with the list only).
   template <class Block>
-  void blocks(int64_t p, const double* x, Block&& block) const {
-    for_partners(p, [&](int64_t q) {
+  void blocks(int64_t pos, int64_t p, const double* x, Block&& block) const {
+    for_partners(pos, [&](int64_t q) {
       PairTerm t;
       double b[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
       if (term(x, p, q, t))
@@ -126,15 +134,23 @@ class SelfContact {
   void memory(MemoryTable& t) const;
 
  private:
-  void size_arrays(int64_t n);
+  // Room for `hashed` particles in the hash (the list's and the contact
+  // ghosts), as fit_to_lists.
+  void fit_hash(int64_t hashed, int64_t n, bool exact);
   // The largest squared move of a listed particle since the last build.
   double worst_move(const ActiveList& particles, const double* x) const;
   void build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo);
   void hash_particles(const ActiveList& particles);
-  // Calls f(q) for each particle q != p within the search reach of p at the
-  // build's positions and not excluded as p's mesh neighbour.
+  // The build's position of hashed particle h: the list's first (by list
+  // position), then the contact ghosts (ascending id).
+  const double* built_at(int64_t h) const {
+    return h < own_ ? &xb_[3 * h] : &gx_[3 * (h - own_)];
+  }
+  // Calls f(q) for each particle q != p (p at list position pos) within the
+  // search reach of p at the build's positions and not excluded as p's mesh
+  // neighbour.
   template <class F>
-  void candidates(const Cloth& c, int64_t p, F&& f) const;
+  void candidates(const Cloth& c, const ActiveList& particles, int64_t pos, F&& f) const;
   int64_t bucket_of(int64_t cx, int64_t cy, int64_t cz) const;
   void cell_of(const double* x, int64_t cell[3]) const;
   // Adds a pair's slope n n^T (v_p - v_q) to out.
@@ -146,15 +162,17 @@ class SelfContact {
 
   Contact contact_;
   double dist_ = 0, reach_ = 0, exclude2_ = 0;
-  uint64_t stamp_ = 0, counted_stamp_ = 0, builds_ = 0;
+  uint64_t stamp_ = 0, builds_ = 0;
   int64_t buckets_ = 1;             // the last build's bucket count (a power of two)
   int64_t listed_ = 0;
-  std::vector<double> xb_;          // positions of the last build, 3 per grid particle
-  std::vector<int64_t> first_;      // per grid particle: its partners' offset in ids_
-  std::vector<int32_t> count_;      // per grid particle: its partners (0 for any unlisted)
+  int64_t own_ = 0;                 // the list's particles at the last build
+  std::vector<double> xb_;          // positions of the last build, 3 per list position
+  std::vector<double> gx_;          // the contact ghosts' positions then (the build's scratch)
+  std::vector<int64_t> first_;      // per list position: its partners' offset in ids_
+  std::vector<int32_t> count_;      // per list position: its partners
   std::vector<int32_t> ids_;        // partners, each particle's ascending
   std::vector<int32_t> lo_;         // beside ids_: their indices in a rank's own numbering (number_partners)
-  std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: particles by bucket, list order
+  std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: hashed particles (built_at) by bucket
   std::vector<int64_t> ghosts_;     // the last build's contact ghosts, ascending
   std::vector<int64_t> kept_;       // those some listed particle has as a partner
   std::vector<char> partner_;       // per contact ghost: a partner (the build's scratch)

@@ -216,7 +216,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     }
     add_friction_product(p, z, vp, out);
     if (m_.self_contact)  // partners: free here, or contact ghosts (numbered with the others)
-      self_.add_product_local(p, z, vp, v, out);
+      self_.add_product_local(pos, p, z, vp, v, out);
     gather_vector(rows_[pos], out);
     for (int k = 0; k < 3; ++k) kv[3 * pos + k] = out[k];
   };
@@ -320,7 +320,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     const double* kc = contact_at(p, size_t(pos), mine);
     double dsum = kc[5] + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
-    if (m_.self_contact) dsum += self_.slope_sum(p, z) / 3;
+    if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
     gather_diagonal(rows_[pos], dsum);
     for (int k = 0; k < 3; ++k) diag[3 * pos + k] = dsum;
   };

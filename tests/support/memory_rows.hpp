@@ -1,7 +1,6 @@
 #pragma once
 // The solvers' arrays that still follow the grid, by name: what only a
-// gradient at z's indices or K's
-// assembly hold, and self-contact's pair list. Newton's product vectors (own numbering) and the
+// gradient at z's indices or K's assembly hold. Newton's product vectors (own numbering) and the
 // nonlinear CG's (compact) are checked like the rest. Every other array of the evaluator's, Newton's and the
 // time loop's tables holds this rank's listed elements, rows or unknowns
 // (test_memory, test_mpi_memory_np2 check it).
@@ -19,9 +18,6 @@ inline bool follows_the_grid(const MemoryTable::Row& r) {
       "Evaluator: assembly maps",
       "Evaluator: numeric gradient's copy of z",
   };
-  // Self-contact's arrays are sized for the finest grid at its first build
-  // (design.md §1: about 64 bytes a particle).
-  if (r.owner == "SelfContact") return true;
   const std::string key = r.owner + ": " + r.array;
   for (const char* n : named)
     if (key == n) return true;
