@@ -101,7 +101,7 @@ int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
 // Counting sort of the listed particles, then the contact ghosts, by
 // bucket, in that order: serial, one pass, so the hash is the same whatever
 // the thread count (and the partners are sorted after anyway).
-void SelfContact::hash_particles(const ActiveList& particles) {
+void SelfContact::hash_particles() {
   // Buckets for these particles (a coarse stage has far fewer than the
   // grid the arrays were sized for): a power of two, at least twice them.
   const int64_t hashed = own_ + int64_t(ghosts_.size());
@@ -162,7 +162,7 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
   // Other ranks' particles within reach, and their positions into gx_.
   halo.plan_contact(particles.items, xb_.data(), reach_, ghosts_, gx_);
   fit_hash(n + int64_t(ghosts_.size()), c.grid.n(), false);
-  hash_particles(particles);
+  hash_particles();
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
     int32_t m = 0;

@@ -140,7 +140,7 @@ class SelfContact {
   // The largest squared move of a listed particle since the last build.
   double worst_move(const ActiveList& particles, const double* x) const;
   void build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo);
-  void hash_particles(const ActiveList& particles);
+  void hash_particles();
   // The build's position of hashed particle h: the list's first (by list
   // position), then the contact ghosts (ascending id).
   const double* built_at(int64_t h) const {
