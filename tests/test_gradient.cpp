@@ -21,6 +21,7 @@
 #include "solver/loops.hpp"
 #include "solver/multigrid/block_matrix.hpp"
 #include "support/assembled_check.hpp"
+#include "support/memory_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace drape::test {
@@ -1175,6 +1176,52 @@ TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
     const std::vector<double> mine = entry.second(ev), theirs = entry.second(fresh);
     EXPECT_EQ(mine, theirs) << entry.first << " first after " << (refine ? "a refine" : "fixing a particle");
     refine = !refine;
+  }
+}
+
+// Newton's runs hold one number a triple and a cell in the element buffers
+// (the particles multiply it by the kept gradients): the residual, K's
+// diagonal and K v are the wide buffers' bit for bit. The same world
+// before and after an entry point that widens them for good (the scaling
+// diagonal's).
+TEST(Stiffness, NarrowBuffersAreTheWideOnes) {
+  for (bool amrc : {false, true}) {
+    const auto world = random_world(13, amrc);
+    Simulation& w = *world;
+    Evaluator& ev = w.loop->evaluator();
+    const size_t n = w.cloth.z.size();
+    std::vector<double> v(n, 0.0), scale(n);
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int64_t p : w.lists.particles.items)
+      for (int k = 0; k < 3; ++k) v[3 * p + k] = u(rng);
+    struct Parts {
+      std::vector<double> residual, diag, kv;
+      size_t buffers = 0;
+    };
+    auto parts = [&] {
+      Parts o;
+      o.diag.assign(n, 0.0);
+      o.kv.assign(n, 0.0);
+      ev.settled_cost(w.cloth.z.data());
+      o.residual = ev.residual();
+      ev.stiffness_diagonal(w.cloth.z.data(), o.diag.data());
+      std::vector<double> vv = v;
+      ev.stiffness_product(w.cloth.z.data(), vv.data(), o.kv.data());
+      MemoryTable t;
+      ev.memory(t);
+      o.buffers = row_bytes(t, "Evaluator: element buffers (edges, triples, cells)");
+      return o;
+    };
+    const Parts narrow = parts();
+    ev.scaling_diagonal(w.cloth.z.data(), scale.data());
+    const Parts wide = parts();
+    const char* mesh = amrc ? "AMRC mesh" : "plain mesh";
+    EXPECT_GT(wide.buffers, 2 * narrow.buffers) << mesh << ": the buffers did not widen";
+    EXPECT_EQ(narrow.residual, wide.residual) << mesh;
+    EXPECT_EQ(narrow.diag, wide.diag) << mesh;
+    EXPECT_EQ(narrow.kv, wide.kv) << mesh;
+    EXPECT_NE(narrow.kv, std::vector<double>(n, 0.0)) << mesh << ": no product: the test does not test";
   }
 }
 

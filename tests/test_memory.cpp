@@ -211,12 +211,14 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
 // bytes a grid particle of a finest 129 x 129 Newton run (2 edges, 2
 // triples and a cell a particle, a little less at the borders): the element
 // buffers an edge's one entry (3 doubles: its ends' are each other's
-// negatives), a triple's 9, a cell's 12, 36 doubles; the kept numbers an
-// edge's 8, a triple's 7 (kept_bend), a cell's 13 and a particle's 6, 49
-// doubles. K's frozen slopes and tensions, which the kept numbers carry,
-// are held only by an evaluator that does not keep them. Both ends' entries
-// of an edge, a triple's three gradients, or the frozen slopes beside the
-// kept numbers held again fail here.
+// negatives), a triple's and a cell's one number (times the kept
+// gradients), 9 doubles; the kept numbers an edge's 8, a triple's 7
+// (kept_bend), a cell's 13 and a particle's 6, 49 doubles. K's frozen
+// slopes and tensions, which the kept numbers carry, are held only by an
+// evaluator that does not keep them; a nonlinear CG run holds neither.
+// Both ends' entries of an edge, a triple's or a cell's contributions to
+// each particle, or the frozen slopes beside the kept numbers held again
+// fail here.
 TEST(Memory, ElementBuffersAndKeptNumbersHoldNoMore) {
   Scene s;
   s.cloth.particles = {129, 129};
@@ -230,8 +232,8 @@ TEST(Memory, ElementBuffersAndKeptNumbersHoldNoMore) {
   const double buffers = double(row_bytes(t, "Evaluator: element buffers (edges, triples, cells)")) * per;
   const double kept = double(row_bytes(t, "Evaluator: products' kept numbers (elements, contact)")) * per;
   std::printf("element buffers %.1f, kept numbers %.1f bytes a particle\n", buffers, kept);
-  EXPECT_GT(buffers, 0.95 * 36 * 8);
-  EXPECT_LE(buffers, 36 * 8);
+  EXPECT_GT(buffers, 0.95 * 9 * 8);
+  EXPECT_LE(buffers, 9 * 8);
   EXPECT_GT(kept, 0.95 * 49 * 8);
   EXPECT_LE(kept, 49 * 8);
   const std::string frozen = "Evaluator: K's frozen slopes and tensions";
@@ -241,6 +243,13 @@ TEST(Memory, ElementBuffersAndKeptNumbersHoldNoMore) {
   w.loop->evaluator().memory(off);
   EXPECT_GT(double(row_bytes(off, frozen)) * per, 0.95 * 7 * 8) << "not keeping, the products read them";
   EXPECT_EQ(row_bytes(off, "Evaluator: products' kept numbers (elements, contact)"), 0u);
+  s.solver.method = SolverMethod::Cg;
+  Simulation cg(s, test_fabric());
+  cg.step();
+  MemoryTable c;
+  cg.loop->evaluator().memory(c);
+  EXPECT_EQ(row_bytes(c, "Evaluator: products' kept numbers (elements, contact)"), 0u) << "nonlinear CG";
+  EXPECT_EQ(row_bytes(c, frozen), 0u) << "nonlinear CG";
 }
 
 // Keeping the products again (keep_products sizes its arrays to the lists,

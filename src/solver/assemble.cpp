@@ -133,7 +133,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
         }
       for (int k = 2; k < 5; ++k)
         if (at[k] >= 0) {
-          const int64_t pos = at[k] / kTripleSlot, part = (at[k] % kTripleSlot) / 3;
+          const int64_t pos = at[k], part = k - 2;  // places 2-4: its parts 0-2
           int64_t ids[3];
           triple_ids(slot_at(lists_.triples, lists_.ring_triples, pos), pos, ids);
           double kg[1 + 3 * 3];  // the factor and the three gradients, as a cell's
@@ -146,7 +146,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
     }
     for (int k = 0; k < 4; ++k)
       if (at[k] >= 0) {
-        const int64_t pos = at[k] / kShearSlot, part = (at[k] % kShearSlot) / 3;
+        const int64_t pos = at[k], part = k;
         int64_t ids[4];
         cell_ids(slot_at(lists_.shears, lists_.ring_shears, pos), pos, ids);
         rank_one(&kg_s_[kKgCell * pos], 4, int(part), ids, w, columns);

@@ -98,13 +98,17 @@ void Evaluator::fit_arrays(bool exact) {
   };
   const size_t me = 2 * n, mt = 2 * n, ms = n;  // the grid's slots
   each(buf_e_, ne, kEdgeEntry, me, 0.0);
-  each(buf_t_, nt, kTripleSlot, mt, 0.0);
-  each(buf_s_, ns, kShearSlot, ms, 0.0);
+  narrow_ = keep_ && !wide_;
+  each(buf_t_, nt, narrow_ ? 1 : kTripleSlot, mt, 0.0);
+  each(buf_s_, ns, narrow_ ? 1 : kShearSlot, ms, 0.0);
   each(cost_e_, ne, 1, me, 0.0);
   each(cost_t_, nt, 1, mt, 0.0);
   each(cost_s_, ns, 1, ms, 0.0);
   if (slopes_) fit_slopes(exact);
-  if (!keep_) {  // keeping, the kept numbers carry them
+  if (!stiffness_) {  // a nonlinear CG run's: no stiffness numbers at all
+    for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_, &k_tension_, &k_slope_e_, &k_slope_t_, &k_slope_s_})
+      std::vector<double>().swap(*a);
+  } else if (!keep_) {  // keeping, the kept numbers carry them
     each(k_tension_, ne, 1, me, 0.0);
     each(k_slope_e_, ne, 1, me, 0.0);
     each(k_slope_t_, nt, 1, mt, 0.0);
@@ -157,8 +161,23 @@ void Evaluator::fit_to_lists(bool exact) {
 
 void Evaluator::keep_products(bool on) {
   for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_}) std::vector<double>().swap(*a);  // off: no memory
-  keep_ = on;
+  keep_wanted_ = on;
+  keep_ = on && stiffness_;
   fit_to_lists(true);  // the frozen slopes' arrays follow (off: held); may move the rows: listed again at the next call
+  kg_ready_ = settled_ = false;
+}
+
+void Evaluator::widen() {
+  if (wide_) return;
+  wide_ = true;
+  fit_arrays(false);  // the buffers grow to their wide entries; their contents are rewritten before read
+}
+
+void Evaluator::hold_stiffness(bool on) {
+  if (on == stiffness_) return;
+  stiffness_ = on;
+  keep_ = keep_wanted_ && on;
+  fit_arrays(true);  // frees them (off) or sizes them to the lists (on), the buffers to their widths
   kg_ready_ = settled_ = false;
 }
 
@@ -250,12 +269,13 @@ bool Evaluator::listed_row(int64_t p, GatherRow& row) const {
 
 bool Evaluator::listed_row(int64_t p, GatherRow& row, ListWalk& walk) const {
   std::fill(row.at, row.at + 16, -1);
-  static constexpr int width[3] = {kEdgeEntry, kTripleSlot, kShearSlot};
   bool listed = true;
-  for_gathered(p, [&](int place, int kind, int64_t s, int part) {
+  for_gathered(p, [&](int place, int kind, int64_t s, int) {
     const int64_t pos = walk.position(place, kind, s);
-    if (pos >= 0)  // an edge's one entry serves both its ends (the gather knows which by place)
-      row.at[place] = int32_t(width[kind] * pos + (kind == 0 ? 0 : 3 * part));
+    // An edge's one entry serves both its ends (the gather knows which by
+    // place); a triple's or cell's position (its part too is the place's).
+    if (pos >= 0)
+      row.at[place] = int32_t(kind == 0 ? kEdgeEntry * pos : pos);
     else
       listed = false;
   });
@@ -608,8 +628,11 @@ void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], 
     if (active_.enabled()) active_.note(1, pos + l, q[l], lane_value(b4, l), stl);
     const int64_t m = c_.layout.moment() + s[l];
     f[l] = settle ? (settle[m] = stl.f) : z[m];
-    if (settle && keep_) kept_bend(w[l] * stl.df_dq / Lm[l], g[l], &kg_t_[kKgTriple * (pos + l)]);
-    for (int i = 0; i < 3; ++i) put(&buf_t_[kTripleSlot * (pos + l) + 3 * i], g[l][i], f[l] * w[l]);
+    if ((settle && keep_) || narrow_) kept_bend(w[l] * stl.df_dq / Lm[l], g[l], &kg_t_[kKgTriple * (pos + l)]);
+    if (narrow_)
+      buf_t_[pos + l] = f[l] * w[l];
+    else
+      for (int i = 0; i < 3; ++i) put(&buf_t_[kTripleSlot * (pos + l) + 3 * i], g[l][i], f[l] * w[l]);
   }
   const bool slopes = !gq_t_.empty();
   band_costs4(b4, st, loadu4(f), w / (Lm * splat4(m_.force_scale)), m_.use_bend, m_.memory, &Lm, &cost_t_[pos],
@@ -664,8 +687,11 @@ void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], con
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   active_.note(1, pos, th / Lm, bv, st);
   const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
-  if (settle && keep_) kept_bend(w * st.df_dq / Lm, g, &kg_t_[kKgTriple * pos]);
-  for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
+  if ((settle && keep_) || narrow_) kept_bend(w * st.df_dq / Lm, g, &kg_t_[kKgTriple * pos]);
+  if (narrow_)
+    buf_t_[pos] = f * w;
+  else
+    for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], g[k], f * w);
   const BandExcess ex = m_.use_bend ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / (Lm * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
@@ -687,8 +713,11 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   active_.note(2, pos, phi, bv, st);
   const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
-  if (settle && keep_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
-  for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
+  if ((settle && keep_) || narrow_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
+  if (narrow_)
+    buf_s_[pos] = f * A;
+  else
+    for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
   const double lam = A / (root_s_[pos] * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
@@ -735,8 +764,11 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
     if (active_.enabled()) active_.note(2, pos + l, phi[l], lane_value(b4, l), stl);
     const int64_t t = c_.layout.shear() + s[l];
     f[l] = settle ? (settle[t] = stl.f) : z[t];
-    if (settle && keep_) kept_gradients(A[l] * stl.df_dq, g[l], 4, &kg_s_[kKgCell * (pos + l)]);
-    for (int i = 0; i < 4; ++i) put(&buf_s_[kShearSlot * (pos + l) + 3 * i], g[l][i], f[l] * A[l]);
+    if ((settle && keep_) || narrow_) kept_gradients(A[l] * stl.df_dq, g[l], 4, &kg_s_[kKgCell * (pos + l)]);
+    if (narrow_)
+      buf_s_[pos + l] = f[l] * A[l];
+    else
+      for (int i = 0; i < 4; ++i) put(&buf_s_[kShearSlot * (pos + l) + 3 * i], g[l][i], f[l] * A[l]);
   }
   const bool slopes = !gq_s_.empty();
   band_costs4(b4, st, loadu4(f), A / (rest * splat4(m_.force_scale)), m_.use_shear, m_.memory, nullptr,
@@ -964,6 +996,7 @@ CostTerms Evaluator::settled_cost(double* z) {
 // sized, every cost pass writes them, as it always did.
 void Evaluator::size_slopes() {
   if (slopes_) return;
+  widen();
   slopes_ = true;
   fit_slopes(true);
   rho_grid_.assign(3 * size_t(c_.grid.n()), 0.0);
@@ -991,6 +1024,7 @@ CostTerms Evaluator::evaluate_as(double* z, double* grad, bool compact) {
   cost_z_ = nullptr;
   list_rows();
   settled_ = false;
+  kg_ready_ = kg_ready_ && !narrow_;  // narrow, the pass keeps the elements' numbers at z
   refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);
   interpolate_hanging(z);
@@ -1200,6 +1234,7 @@ void Evaluator::for_each_unknown_entry(double* out, F&& f) {
 
 void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
   compact_ = compact;
+  widen();
   list_rows();
   refresh_pairs(z);
   halo_.exchange(z, Halo::kAll);

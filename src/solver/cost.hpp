@@ -170,6 +170,11 @@ class Evaluator {
   // (bench_gradient's BM_KeptProducts times both). Allocates: call it
   // before the time loop.
   void keep_products(bool on);
+  // Whether the Newton solver's numbers (the kept ones above, or K's frozen
+  // slopes and tensions) are held at all: on from the start; a nonlinear CG
+  // run, which never reads them, turns it off (TimeLoop) and holds neither.
+  // A stiffness entry point turns it on again (allocating).
+  void hold_stiffness(bool on);
   // Newton through the bands' kinks (band_active_set.hpp): on, every
   // evaluation notes each band element's strain, force and branch.
   // Allocates: call it before the time loop.
@@ -410,19 +415,21 @@ class Evaluator {
   const double* cost_z_ = nullptr;
   template <class Visit>
   void for_gathered(int64_t p, Visit&& visit) const;
-  // add(c) for each entry of the row in the gather's order, sub(c) where
-  // the particle is an edge's first end (its entry is the other end's,
-  // negated: kEdgeEntry).
-  template <class Add, class Sub>
-  void gather_listed(const GatherRow& row, Add&& add, Sub&& sub) const;
-  // The row's entries summed into out (3), gather_listed's order: forces,
-  // gradients, K v. Written out: the particle passes' inner loop.
-  void gather_vector(const GatherRow& row, double out[3]) const;
-  // Their first numbers summed into sum: diagonals (an edge's is the same at both ends).
-  void gather_diagonal(const GatherRow& row, double& sum) const {
-    const auto add = [&](const double* c) { sum += c[0]; };
-    gather_listed(row, add, add);
+  // The row's entries summed into out (3), in for_gathered's order: forces,
+  // gradients, K v. Written out, no lambdas passed: the particle passes'
+  // inner loop (through lambdas the product's loop no longer inlined it,
+  // 9-18 % slower).
+  void gather_vector(const GatherRow& row, double out[3]) const {
+    if (narrow_)
+      gather_vector_as<true>(row, out);
+    else
+      gather_vector_as<false>(row, out);
   }
+  template <bool Narrow>
+  void gather_vector_as(const GatherRow& row, double out[3]) const;
+  // Their diagonals summed into sum (an edge's is the same at both ends;
+  // narrow, a triple's and a cell's from the kept numbers).
+  void gather_diagonal(const GatherRow& row, double& sum) const;
   // p's row (any active particle: the hanging ones, which have no place in
   // the particle list, too); false if one of its elements is in no list,
   // left out of the row. That happens only to a hanging particle far from
@@ -514,6 +521,16 @@ class Evaluator {
   // which the first end gathers negated, or, for a diagonal, as it is.
   static constexpr int kEdgeEntry = 3;
   std::vector<double> buf_e_, buf_t_, buf_s_;     // per-element contributions to particles (3, 9, 12), list order
+  // Narrow (keeping products, no gradient or scaling diagonal asked for:
+  // Newton's runs), a triple's and a cell's buffer holds one number c, its
+  // contribution to its k-th particle being c times the kept gradient g_k
+  // (the residual's force times width or area, K v's stiffness along the
+  // gradients); the diagonal of K reads the kept numbers alone. A
+  // gradient's contributions (a force times the gradient's derivative plus
+  // a slope times the gradient) and the scaling diagonal's are no multiple
+  // of one vector: the first such entry point widens them for good (wide_).
+  bool wide_ = false, narrow_ = false;  // narrow_: keep_ && !wide_, as fit_arrays sized them
+  void widen();
   std::vector<double> cost_p_;                    // Newton cost per free particle, list order
   // Per element, in list order like buf_*: a coarse mesh's elements lie far
   // apart in grid order, one cache line each per array.
@@ -538,6 +555,8 @@ class Evaluator {
   // stiffness_diagonal at the same z reads them instead of computing the
   // elements' strains, bands and angles a third time.
   bool keep_ = false;
+  bool keep_wanted_ = true;  // keep_products' setting; keep_ is it while stiffness_ holds
+  bool stiffness_ = true;    // hold_stiffness
   bool kg_ready_ = false;
   bool settled_ = false;
   std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
@@ -681,31 +700,29 @@ void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
   }
 }
 
-// A particle's entries of the element buffers, from its row.
-template <class Add, class Sub>
-void Evaluator::gather_listed(const GatherRow& row, Add&& add, Sub&& sub) const {
-  const int32_t* at = row.at;
-  const double *e = buf_e_.data(), *t = buf_t_.data(), *s = buf_s_.data();
-  for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
-    if (at[0] >= 0) sub(e + at[0]);  // p is the edge's first end
-    if (at[1] >= 0) add(e + at[1]);
-    if (at[2] >= 0) add(t + at[2]);
-    if (at[3] >= 0) add(t + at[3]);
-    if (at[4] >= 0) add(t + at[4]);
-  }
-  for (int k = 0; k < 4; ++k)
-    if (at[k] >= 0) add(s + at[k]);
-}
+// Row entries of a triple (places 2-4 of a direction: its parts 0-2) and a
+// cell (kShear + k: its part k) are the element's list position; the wide
+// buffers' offsets follow from it.
+inline int64_t wide_triple(int32_t pos, int part) { return int64_t(kTripleSlot) * pos + 3 * part; }
+inline int64_t wide_cell(int32_t pos, int part) { return int64_t(kShearSlot) * pos + 3 * part; }
 
-// gather_listed's walk written out: through its lambdas the product's loop
-// no longer inlined it (9-18 % slower).
-inline void Evaluator::gather_vector(const GatherRow& row, double out[3]) const {
+// gather_vector's walk, the triples' and cells' contributions read from
+// the wide buffers or, narrow, their one number times the kept gradient:
+// the element passes' own product, so the same numbers bit for bit.
+template <bool Narrow>
+inline void Evaluator::gather_vector_as(const GatherRow& row, double out[3]) const {
   const int32_t* at = row.at;
   const double *e = buf_e_.data(), *t = buf_t_.data(), *s = buf_s_.data();
+  const double *kt = kg_t_.data(), *ks = kg_s_.data();
   const auto add = [out](const double* c) {
     out[0] += c[0];
     out[1] += c[1];
     out[2] += c[2];
+  };
+  const auto add_times = [out](double c, const V3<double>& g) {
+    out[0] += c * g.x;
+    out[1] += c * g.y;
+    out[2] += c * g.z;
   };
   for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
     if (at[0] >= 0) {  // out - c is out + (-c): the first end's entry's sum, bit for bit
@@ -714,12 +731,40 @@ inline void Evaluator::gather_vector(const GatherRow& row, double out[3]) const 
       out[2] -= e[at[0] + 2];
     }
     if (at[1] >= 0) add(e + at[1]);
-    if (at[2] >= 0) add(t + at[2]);
-    if (at[3] >= 0) add(t + at[3]);
-    if (at[4] >= 0) add(t + at[4]);
+    for (int k = 0; k < 3; ++k) {
+      const int32_t pos = at[2 + k];
+      if (pos < 0) continue;
+      if constexpr (Narrow)
+        add_times(t[pos], kept_bend_gradient(kt + int64_t(kKgTriple) * pos, k));
+      else
+        add(t + wide_triple(pos, k));
+    }
   }
-  for (int k = 0; k < 4; ++k)
-    if (at[k] >= 0) add(s + at[k]);
+  for (int k = 0; k < 4; ++k) {
+    const int32_t pos = at[k];
+    if (pos < 0) continue;
+    if constexpr (Narrow)
+      add_times(s[pos], kept_cell_gradient(ks + int64_t(kKgCell) * pos, k));
+    else
+      add(s + wide_cell(pos, k));
+  }
+}
+
+inline void Evaluator::gather_diagonal(const GatherRow& row, double& sum) const {
+  const int32_t* at = row.at;
+  const double *e = buf_e_.data(), *t = buf_t_.data(), *s = buf_s_.data();
+  for (int d = 0; d < 2; ++d, at += GatherRow::kPerDirection) {
+    if (at[0] >= 0) sum += e[at[0]];  // an edge's is the same at both ends
+    if (at[1] >= 0) sum += e[at[1]];
+    for (int k = 0; k < 3; ++k) {
+      const int32_t pos = at[2 + k];
+      if (pos >= 0) sum += narrow_ ? kept_bend_diagonal_at(&kg_t_[size_t(kKgTriple) * pos], k) : t[wide_triple(pos, k)];
+    }
+  }
+  for (int k = 0; k < 4; ++k) {
+    const int32_t pos = at[k];
+    if (pos >= 0) sum += narrow_ ? kept_gradient_diagonal(&kg_s_[size_t(kKgCell) * pos], k) : s[wide_cell(pos, k)];
+  }
 }
 
 template <class FE, class FT, class FS>

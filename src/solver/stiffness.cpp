@@ -129,6 +129,7 @@ void Evaluator::add_friction_product(int64_t p, const double* z, const double* v
 }
 
 void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) {
+  hold_stiffness(true);
   list_rows();
   use_local();
   if (pairs_numbered_ != self_.builds()) number_pairs();  // a new pair list on the same numbering
@@ -174,6 +175,10 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     }
     const int32_t* l = &lo_t_[3 * pos];
     const V vk[3] = {at(v, l[0]), at(v, l[1]), at(v, l[2])};
+    if (narrow_) {  // the particles multiply it by their kept gradients
+      buf_t_[pos] = kept_bend_stiffness(kg, vk);
+      return;
+    }
     V out[3];
     kept_bend_product(kg, vk, out);
     for (int k = 0; k < 3; ++k) put(&buf_t_[kTripleSlot * pos + 3 * k], out[k]);
@@ -191,6 +196,10 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     }
     const int32_t* l = &lo_s_[4 * pos];
     const V vk[4] = {at(v, l[0]), at(v, l[1]), at(v, l[2]), at(v, l[3])};
+    if (narrow_) {
+      buf_s_[pos] = kept_gradient_stiffness<4>(kg, vk);
+      return;
+    }
     V out[4];
     kept_gradient_product<4>(kg, vk, out);
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], out[k]);
@@ -276,6 +285,7 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // numbers stay kept (keep_products), so that no product computes anything
 // but itself.
 void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
+  hold_stiffness(true);
   list_rows();
   // At a z no evaluation saw (Newton's order never does that), a new pair
   // list's contact ghosts need their positions: z's ghost entries are a
@@ -300,6 +310,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double mine[kKgTriple];
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (!settled) triple_numbers(s, pos, z, kg);
+    if (narrow_) return;  // the particles read the kept numbers
     double d[3];
     kept_bend_diagonal(kg, d);
     for (int k = 0; k < 3; ++k) buf_t_[kTripleSlot * pos + 3 * k] = d[k];
@@ -308,7 +319,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double mine[kKgCell];
     double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
     if (!settled) shear_numbers(s, pos, z, kg);
-    gradients(kg, &buf_s_[kShearSlot * pos], 4);
+    if (!narrow_) gradients(kg, &buf_s_[kShearSlot * pos], 4);
   };
   auto contact_at = [&](int64_t p, size_t row, double* mine) -> const double* {
     double* kc = keep_ ? &kc_[kKc * row] : mine;

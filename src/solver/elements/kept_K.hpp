@@ -9,13 +9,17 @@
 
 namespace drape {
 
-// K v's contributions to the n particles, for their moves v, from the
-// slope factor and the gradients g.
+// K v's contributions to the n particles are stiff * g[k]: the slope
+// factor times the moves v along the gradients g.
 template <int N>
-inline void rank_one_product(double factor, const V3<double> g[N], const V3<double> v[N], V3<double> out[N]) {
+inline double rank_one_stiffness(double factor, const V3<double> g[N], const V3<double> v[N]) {
   double along = 0;
   for (int k = 0; k < N; ++k) along += dot(g[k], v[k]);
-  const double stiff = factor * along;
+  return factor * along;
+}
+template <int N>
+inline void rank_one_product(double factor, const V3<double> g[N], const V3<double> v[N], V3<double> out[N]) {
+  const double stiff = rank_one_stiffness<N>(factor, g, v);
   for (int k = 0; k < N; ++k) out[k] = stiff * g[k];
 }
 
@@ -26,6 +30,15 @@ inline void kept_gradient_product(const double* kg, const V3<double> v[N], V3<do
   for (int k = 0; k < N; ++k) g[k] = load3<double>(kg + 1 + 3 * k);
   rank_one_product<N>(kg[0], g, v, out);
 }
+// Its stiff alone: the one number a cell's buffer holds, the particles
+// multiplying it by their kept gradients (kept_cell_gradient).
+template <int N>
+inline double kept_gradient_stiffness(const double* kg, const V3<double> v[N]) {
+  V3<double> g[N];
+  for (int k = 0; k < N; ++k) g[k] = load3<double>(kg + 1 + 3 * k);
+  return rank_one_stiffness<N>(kg[0], g, v);
+}
+inline V3<double> kept_cell_gradient(const double* kg, int k) { return load3<double>(kg + 1 + 3 * k); }
 
 // The block's diagonal entry at particle k (the mean over its three axes).
 inline double kept_gradient_diagonal(const double* kg, int k) {
@@ -55,11 +68,27 @@ inline void kept_bend_product(const double* kg, const V3<double> v[3], V3<double
   kept_bend_gradients(kg, g);
   rank_one_product<3>(kg[0], g, v, out);
 }
+inline double kept_bend_stiffness(const double* kg, const V3<double> v[3]) {
+  V3<double> g[3];
+  kept_bend_gradients(kg, g);
+  return rank_one_stiffness<3>(kg[0], g, v);
+}
+// Particle k's gradient alone, kept_bend_gradients' g[k] bit for bit.
+inline V3<double> kept_bend_gradient(const double* kg, int k) {
+  if (k == 0) return -1.0 * load3<double>(kg + 1);
+  if (k == 1) return load3<double>(kg + 1) - load3<double>(kg + 4);
+  return load3<double>(kg + 4);
+}
 // Its diagonal entries at its three particles (diag[k]).
 inline void kept_bend_diagonal(const double* kg, double diag[3]) {
   V3<double> g[3];
   kept_bend_gradients(kg, g);
   for (int k = 0; k < 3; ++k) diag[k] = kg[0] * dot(g[k], g[k]) / 3;
+}
+// diag[k] alone.
+inline double kept_bend_diagonal_at(const double* kg, int k) {
+  const V3<double> g = kept_bend_gradient(kg, k);
+  return kg[0] * dot(g, g) / 3;
 }
 
 }  // namespace drape
