@@ -212,8 +212,9 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
 // triples and a cell a particle, a little less at the borders): the element
 // buffers an edge's one entry (3 doubles: its ends' are each other's
 // negatives), a triple's and a cell's one number (times the kept
-// gradients), 9 doubles; the kept numbers an edge's 8, a triple's 7
-// (kept_bend), a cell's 13 and a particle's 6, 49 doubles. K's frozen
+// gradients), 9 doubles; the kept numbers an edge's 7 (its 1/|e| computed
+// again), a triple's 7 (kept_bend), a cell's 13 and a particle's 5 (its
+// mass term computed again), 46 doubles. K's frozen
 // slopes and tensions, which the kept numbers carry, are held only by an
 // evaluator that does not keep them; a nonlinear CG run holds neither.
 // Both ends' entries of an edge, a triple's or a cell's contributions to
@@ -234,8 +235,8 @@ TEST(Memory, ElementBuffersAndKeptNumbersHoldNoMore) {
   std::printf("element buffers %.1f, kept numbers %.1f bytes a particle\n", buffers, kept);
   EXPECT_GT(buffers, 0.95 * 9 * 8);
   EXPECT_LE(buffers, 9 * 8);
-  EXPECT_GT(kept, 0.95 * 49 * 8);
-  EXPECT_LE(kept, 49 * 8);
+  EXPECT_GT(kept, 0.95 * 46 * 8);
+  EXPECT_LE(kept, 46 * 8);
   const std::string frozen = "Evaluator: K's frozen slopes and tensions";
   EXPECT_EQ(row_bytes(t, frozen), 0u);
   w.loop->evaluator().keep_products(false);

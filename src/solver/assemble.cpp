@@ -122,8 +122,9 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
           const double* ke = &kg_e_[kKgEdge * pos];
           const int64_t s = slot_at(lists_.edges, lists_.ring_edges, pos);
           const int64_t ends[2] = {s >> 1, nb_e_[pos]};
-          const double u[3] = {ke[0] * ke[4], ke[1] * ke[4], ke[2] * ke[4]};
-          const double a = ke[7] * ke[5] * ke[4], b = ke[7] * ke[6] - a;
+          const double iv = 1.0 / ke[3];
+          const double u[3] = {ke[0] * iv, ke[1] * iv, ke[2] * iv};
+          const double a = ke[6] * ke[4] * iv, b = ke[6] * ke[5] - a;
           double B[9];
           for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) B[3 * i + j] = (i == j ? a : 0.0) + b * u[i] * u[j];
@@ -152,7 +153,8 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
         rank_one(&kg_s_[kKgCell * pos], 4, int(part), ids, w, columns);
       }
   };
-  one(lists_.particles.items[r], r, rows_[r], &kc_[kKc * r], kc_[kKc * r + 5], 1.0);
+  const int64_t p = lists_.particles.items[r];
+  one(p, r, rows_[r], &kc_[kKc * r], c_.mass[p] * m_.inertia_coeff(), 1.0);
   for (int64_t e = ht_start_[r]; e < ht_start_[r + 1]; ++e) {
     const size_t k = size_t(ht_[e].row);
     one(lists_.hanging[k].h, -1, hanging_row(k), &kc_[kKc * (np + k)], 0.0, ht_[e].w);  // no mass at h

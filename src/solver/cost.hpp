@@ -164,7 +164,7 @@ class Evaluator {
   // CG calls it once per solve): it reads the band slopes that call froze.
   void stiffness_product(const double* z, double* v, double* kv);
   // Whether stiffness_product keeps its z-only numbers across a linear
-  // solve (49 doubles a listed particle; K's 7 frozen slopes and tensions
+  // solve (46 doubles a listed particle; K's 7 frozen slopes and tensions
   // a particle are then not held: the kept numbers carry them; on from the
   // start): off, every product computes them again, the same numbers
   // (bench_gradient's BM_KeptProducts times both). Allocates: call it
@@ -544,12 +544,12 @@ class Evaluator {
   // stiffness_product's z-only numbers (keep_products), the elements' by
   // list position, the particles' by row (rows_): edges (edge_kept), triples
   // (kept_bend: slope factor, two gradients) and cells (slope factor, then
-  // the gradient, 4 x 3), contact (force, size, slope) and mass
-  // coefficient. Kept by settled_cost (elements) and
+  // the gradient, 4 x 3) and contact (force, size, slope). Kept by
+  // settled_cost (elements) and
   // the diagonal after it (particles), or all by a diagonal at a z no
   // settled_cost saw (or, after a list change, by the next product);
   // kg_ready_ while they are all the linear solve's z's.
-  static constexpr int kKgEdge = 8, kKgTriple = kKeptBend, kKgCell = 13, kKc = 6;
+  static constexpr int kKgEdge = 7, kKgTriple = kKeptBend, kKgCell = 13, kKc = 5;
   // settled_cost keeps the elements' numbers (settled_, until another
   // evaluation, new anchors or a list change): they are its band stops and gradients, so
   // stiffness_diagonal at the same z reads them instead of computing the

@@ -99,26 +99,26 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z) {
 }
 
 // An edge's z-only numbers for stiffness_product, as edge_length on duals
-// computes their value parts: e = b - a, |e|, 1/|e| (e/|e| is one product
-// away); then its frozen tension, slope / rest length and width.
+// computes their value parts: e = b - a, |e| (1/|e| and e/|e| are one
+// division and a product away); then its frozen tension, slope / rest
+// length and width.
 void Evaluator::edge_kept(const double* za, const double* zb, double length, double tension, double slope_per_rest,
                           double width, double* ke) {
   put(ke, load3<double>(zb) - load3<double>(za));
   ke[3] = length;
-  ke[4] = 1.0 / length;
-  ke[5] = tension;
-  ke[6] = slope_per_rest;
-  ke[7] = width;
+  ke[4] = tension;
+  ke[5] = slope_per_rest;
+  ke[6] = width;
 }
 
 // What stiffness_product needs of a particle: its contact force, the force's
-// size (0 where it does not touch) and slope, and its mass term's coefficient.
+// size (0 where it does not touch) and slope. Its mass term's coefficient,
+// mass times Model::inertia_coeff, is computed where read.
 void Evaluator::contact_kept(int64_t p, const double* z, double* kc) const {
   double slope = 0;
   const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
   kc[3] = touching ? std::sqrt(kc[0] * kc[0] + kc[1] * kc[1] + kc[2] * kc[2]) : 0.0;
   kc[4] = slope;
-  kc[5] = c_.mass[p] * m_.inertia_coeff();
 }
 
 // Adds particle p's friction block times v_p to out (nothing without friction).
@@ -212,13 +212,14 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     if (fill) contact_kept(p, z, kc);
     return kc;
   };
+  const double inertia = m_.inertia_coeff();
   auto particle = [&](int64_t p, int64_t pos) {
     double mine[kKc];
     const double* fc = contact_at(p, size_t(pos), mine);
-    const double fn = fc[3], slope = fc[4];
+    const double fn = fc[3], slope = fc[4], mass = c_.mass[p] * inertia;
     const double* vp = v + 3 * pos;  // the free particles come first, in list order
     double out[3];
-    for (int k = 0; k < 3; ++k) out[k] = fc[5] * vp[k];
+    for (int k = 0; k < 3; ++k) out[k] = mass * vp[k];
     if (fn > 0) {  // slope * n (n.v); n from the force direction
       const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
       for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
@@ -326,10 +327,11 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     contact_kept(p, z, kc);
     return kc;
   };
+  const double inertia = m_.inertia_coeff();
   auto particle = [&](int64_t p, int64_t pos) {
     double mine[kKc];
     const double* kc = contact_at(p, size_t(pos), mine);
-    double dsum = kc[5] + kc[4] / 3;
+    double dsum = c_.mass[p] * inertia + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
     gather_diagonal(rows_[pos], dsum);
