@@ -75,7 +75,7 @@ TEST(Memory, BytesPerParticleStayUnderTheBound) {
   EXPECT_LE(held_after_two_steps(SolverMethod::Cg, 300).listed, 1505.0);
 }
 
-// The cloth's arrays are the grid's on every rank: 167 bytes a particle
+// The cloth's arrays on one rank are the grid's: 167 bytes a particle
 // (z 64, x1 and x2 48, mass, flags and level 10, neighbour tables 16,
 // switches 5, cells' corners 24). What a step derives from them (rest
 // geometry, bending axes, band anchors) the evaluator holds in list order;

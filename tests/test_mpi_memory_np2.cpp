@@ -29,6 +29,7 @@ struct RankRun {
         tiling(cloth.grid.ni, cloth.grid.nj, s.cloth.tile),
         dec(decompose(cloth, tiling, MPI_COMM_WORLD, ghost_widths(false, 0))),
         policy{s.parallel.schedule, s.parallel.chunk} {
+    hold_own_history(cloth, tiling, dec);  // as the program does
     build_active_lists(cloth, tiling, dec.owned, lists, dec.halo->ring());
     loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, *dec.reducer, s.solver, dec.ghosts());
   }
@@ -76,6 +77,44 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
   loop.memory(t);
   EXPECT_TRUE(listed(t, kGatheredLevel));
   EXPECT_EQ(row_bytes(t, kGatheredLevel), 0u);
+}
+
+// The step history (x1, x2, 48 bytes a grid particle on one rank) holds
+// this rank's tiles and its ghosts: well under two thirds of the grid's on
+// one of two ranks. Only its slot map (4 bytes a particle) is the grid's.
+// After a few steps each own particle's history is one rank's, bit for bit.
+TEST(MemoryNp2, HistoryHoldsItsOwnTilesAndGhosts) {
+  Scene s;
+  s.cloth.particles = {65, 65};
+  s.cloth.tile = 8;
+  const Fabric f = test_fabric();
+  Simulation one(s, f);
+  RankRun run(s, f);
+  const Cloth& c = run.cloth;
+  const double n = double(c.grid.n());
+  MemoryTable t;
+  add_memory(t, c);
+  const double history = double(row_bytes(t, "Cloth: x1, x2 (earlier positions)"));
+  std::printf("x1, x2: %.1f bytes a grid particle on this rank of two\n", history / n);
+  EXPECT_LT(history, 0.65 * 48 * n) << "x1, x2 sized by the grid, not this rank's tiles and ghosts?";
+  EXPECT_EQ(row_bytes(t, "Cloth: x1, x2's slots (several ranks)"), size_t(4 * n));
+  Timers tm;
+  for (int k = 0; k < 3; ++k) {
+    one.step();
+    run.loop->step(tm);
+  }
+  int64_t own = 0, differ = 0;
+  for (int tile : run.dec.owned) {
+    const TileRange r = run.tiling.range(tile);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j, ++own) {
+        const int64_t p = c.grid.id(i, j);
+        for (int k = 0; k < 3; ++k)
+          differ += c.x1_at(p)[k] != one.cloth.x1[3 * p + k] || c.x2_at(p)[k] != one.cloth.x2[3 * p + k];
+      }
+  }
+  EXPECT_GT(own, 0);
+  EXPECT_EQ(differ, 0) << "own particles' history differs from one rank's";
 }
 
 // The multigrid on two ranks: each rank receives every rank's rows of K

@@ -121,9 +121,10 @@ void Amrc::speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& 
   // x1 - x2 is the step the next prediction extrapolates (time_loop.cpp).
   per_particle(c, share, out, [&](int64_t p) {
     if (!c.active(p)) return 0.0;
+    const double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
     double s = 0;
     for (int k = 0; k < 3; ++k) {
-      const double d = c.x1[3 * p + k] - c.x2[3 * p + k];
+      const double d = x1[k] - x2[k];
       s += d * d;
     }
     return std::sqrt(s) / c.dt_prev;
@@ -140,11 +141,13 @@ void Amrc::lift_new_particles(Cloth& c, const Contact& contact) const {
     if (clearance(ob, x) >= contact.thickness) continue;
     double y[3] = {x[0], x[1], x[2]};
     push_out(ob, contact.thickness, y);
+    const bool held = c.holds(p);  // the history of another rank's particle is its own
     for (int k = 0; k < 3; ++k) {
       const double d = y[k] - x[k];
       x[k] += d;
-      c.x1[3 * p + k] += d;
-      c.x2[3 * p + k] += d;
+      if (!held) continue;
+      c.x1_at(p)[k] += d;
+      c.x2_at(p)[k] += d;
     }
   }
 }
@@ -208,6 +211,30 @@ void Amrc::carry_shear(Cloth& c) const {
   });
 }
 
+namespace {
+// A new particle's position and history on its old leaf. The history of a
+// particle this rank does not hold is its owner's to carry; a corner it
+// does not hold lies beyond its ghosts, so no particle whose history it
+// holds for its own tiles or ring reads it (taken as 0 there).
+void carry_position(Cloth& c, const Corners& k, int64_t p) {
+  const bool held = c.holds(p);
+  for (int a = 0; a < 3; ++a) {
+    double x = 0, x1 = 0, x2 = 0;
+    for (int q = 0; q < 4; ++q) {
+      const int64_t id = k.id[q];
+      x += k.w[q] * c.z[3 * id + a];
+      if (!held || !c.holds(id)) continue;
+      x1 += k.w[q] * c.x1_at(id)[a];
+      x2 += k.w[q] * c.x2_at(id)[a];
+    }
+    c.z[3 * p + a] = x;
+    if (!held) continue;
+    c.x1_at(p)[a] = x1;
+    c.x2_at(p)[a] = x2;
+  }
+}
+}  // namespace
+
 void Amrc::carry_over(Cloth& c, double density, bool shear) {
   const int64_t n = c.grid.n();
   for (int64_t p = 0; p < n; ++p) {
@@ -226,17 +253,7 @@ void Amrc::carry_over(Cloth& c, double density, bool shear) {
   for (int64_t p = 0; p < n; ++p) {
     if (was_active_[p] || !c.active(p)) continue;
     const Corners k = corners_of(old_, c.grid.i_of(p), c.grid.j_of(p));
-    for (int a = 0; a < 3; ++a) {
-      double x = 0, x1 = 0, x2 = 0;
-      for (int q = 0; q < 4; ++q) {
-        x += k.w[q] * c.z[3 * k.id[q] + a];
-        x1 += k.w[q] * c.x1[3 * k.id[q] + a];
-        x2 += k.w[q] * c.x2[3 * k.id[q] + a];
-      }
-      c.z[3 * p + a] = x;
-      c.x1[3 * p + a] = x1;
-      c.x2[3 * p + a] = x2;
-    }
+    carry_position(c, k, p);
     auto carry = [&](int64_t offset, int per, const std::vector<uint8_t>& on) {
       for (int d = 0; d < per; ++d) {
         double s = 0, w = 0;

@@ -36,7 +36,7 @@ int fault_internal_rank() {
 void inject_nan(Cloth& c, const ActiveLists& lists) {
   for (int64_t p : lists.particles.items)
     if (c.free(p)) {
-      c.x1[3 * p + 2] = std::numeric_limits<double>::quiet_NaN();  // the prediction carries it
+      c.x1_at(p)[2] = std::numeric_limits<double>::quiet_NaN();  // the prediction carries it
       return;
     }
 }

@@ -1,5 +1,7 @@
 #include "decomp/decomposition.hpp"
 
+#include <algorithm>
+
 namespace drape {
 
 GhostWidths ghost_widths(bool amrc, int max_level) {
@@ -24,6 +26,19 @@ Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm,
   d.mpi_reducer = mpi.get();
   d.reducer = std::move(mpi);
   return d;
+}
+
+void hold_own_history(Cloth& c, const Tiling& tiling, const Decomposition& d) {
+  if (!d.halo) return;
+  std::vector<int64_t> held = d.halo->ghost_ids();
+  for (int t : d.owned) {
+    const TileRange r = tiling.range(t);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) held.push_back(c.grid.id(i, j));
+  }
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  hold_history(c, held);
 }
 
 DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {

@@ -62,6 +62,13 @@ int64_t HaloExchange::ghosts() const {
   return g;
 }
 
+std::vector<int64_t> HaloExchange::ghost_ids() const {
+  std::vector<int64_t> ids;
+  for (const Peer& p : peers_) ids.insert(ids.end(), p.recv.begin(), p.recv.end());
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
 void HaloExchange::exchange(double* z, int blocks) const {
   // Per particle: its 3 positions, then its 5 forces (z's blocks).
   const Field all[4] = {{0, 3}, {3 * n_, 2}, {5 * n_, 2}, {7 * n_, 1}};

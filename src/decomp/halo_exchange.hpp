@@ -47,6 +47,8 @@ class HaloExchange : public Halo {
   // Ghosts within ring_width of this rank's (ascending): the element ring.
   const std::vector<int64_t>& ring() const { return ring_; }
   int64_t ghosts() const;
+  // The tile plan's ghosts (not the contact ones), ascending.
+  std::vector<int64_t> ghost_ids() const;
   int neighbours() const { return int(peers_.size()); }
   // Contact ghosts on this rank (the last plan_contact's; 0 after replan).
   int64_t contact_ghosts() const;

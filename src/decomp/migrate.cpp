@@ -21,14 +21,30 @@ void each_value(Cloth& c, const Tiling& tl, int t, F&& f) {
       for (int k = 0; k < 2; ++k) f(c.z[3 * n + 2 * p + k]);
       for (int k = 0; k < 2; ++k) f(c.z[5 * n + 2 * p + k]);
       f(c.z[7 * n + p]);
-      for (int k = 0; k < 3; ++k) f(c.x1[3 * p + k]);
-      for (int k = 0; k < 3; ++k) f(c.x2[3 * p + k]);
+      for (int k = 0; k < 3; ++k) f(c.x1_at(p)[k]);
+      for (int k = 0; k < 3; ++k) f(c.x2_at(p)[k]);
       double fl = c.flags[p], lv = c.level[p];  // small integers: exact as doubles
       f(fl);
       f(lv);
       c.flags[p] = uint8_t(fl);
       c.level[p] = uint8_t(lv);
     }
+}
+
+// Room in x1, x2 for the arriving tiles' particles beside those held
+// already (the rebalance narrows it to the new tiles and ghosts after).
+void hold_arriving(Cloth& c, const Tiling& tl, const std::map<int, std::vector<int>>& in) {
+  if (c.slot_of.empty() || in.empty()) return;  // every particle held
+  std::vector<int64_t> held = held_particles(c);
+  for (const auto& [peer, tiles] : in)
+    for (int t : tiles) {
+      const TileRange r = tl.range(t);
+      for (int i = r.i0; i < r.i1; ++i)
+        for (int j = r.j0; j < r.j1; ++j) held.push_back(c.grid.id(i, j));
+    }
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  hold_history(c, held);
 }
 
 int64_t tile_particles(const Tiling& tl, int t) {
@@ -101,6 +117,7 @@ MigrationStats migrate_tiles(Cloth& c, const Tiling& tl, const std::vector<int>&
     MPI_Isend(sbuf.back().data(), int(sbuf.back().size()), MPI_DOUBLE, peer, tag, comm, &req.back());
   }
   MPI_Waitall(int(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  hold_arriving(c, tl, in);
   size_t k = 0;
   for (auto& [peer, tiles] : in) {
     size_t u = 0;

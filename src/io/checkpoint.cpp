@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <chrono>
 #include <cstdio>
@@ -43,10 +44,11 @@ uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks) {
       for (int j = b.j0; j < b.j1; ++j) {
         const int64_t p = c.grid.id(i, j);
         Hasher h(0x452821e638d01377ULL ^ uint64_t(p));
+        const double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
         for (int k = 0; k < 3; ++k) {
           h.add(c.z[3 * p + k]);
-          h.add(c.x1[3 * p + k]);
-          h.add(c.x2[3 * p + k]);
+          h.add(x1[k]);
+          h.add(x2[k]);
         }
         for (int k = 0; k < 2; ++k) {
           h.add(c.z[3 * n + 2 * p + k]);
@@ -180,6 +182,29 @@ void write_fabric(hid_t root, const Fabric& fabric, int rank, const Writer& w) {
   }
 }
 
+// x1 or x2 of the owned blocks' particles, held in slots (several ranks):
+// packed in the file selection's order (ascending grid id), the memory
+// side a plain run of them.
+void write_history(hid_t group, const std::string& name, const Cloth& c, const std::vector<double>& x,
+                   const std::vector<Block>& owned, const Writer& w) {
+  Selection s = select_blocks(owned, c.grid.ni, c.grid.nj, 3);
+  if (c.slot_of.empty()) {
+    w.dataset(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, x.data(), s);
+    return;
+  }
+  std::vector<int64_t> ids;
+  for (const Block& b : owned)
+    for (int i = b.i0; i < b.i1; ++i)
+      for (int j = b.j0; j < b.j1; ++j) ids.push_back(c.grid.id(i, j));
+  std::sort(ids.begin(), ids.end());
+  std::vector<double> packed;
+  packed.reserve(3 * ids.size());
+  for (int64_t p : ids) packed.insert(packed.end(), &x[size_t(3 * c.slot(p))], &x[size_t(3 * c.slot(p) + 3)]);
+  s.mem = make_space({hsize_t(packed.size())});
+  if (packed.empty()) check_status(H5Sselect_none(s.mem.get()), "selecting nothing");
+  w.dataset(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, packed.data(), s);
+}
+
 void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, const Writer& w) {
   Handle g = w.group(root, "state");
   const int ni = c.grid.ni, nj = c.grid.nj;
@@ -191,8 +216,8 @@ void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, co
   w.dataset(g.get(), "tension", f64, d, c.tension(), s2);
   w.dataset(g.get(), "moment", f64, d, c.moment(), s2);
   w.dataset(g.get(), "shear", f64, d, c.shear(), s1);
-  w.dataset(g.get(), "x1", f64, d, c.x1.data(), s3);
-  w.dataset(g.get(), "x2", f64, d, c.x2.data(), s3);
+  write_history(g.get(), "x1", c, c.x1, owned, w);
+  write_history(g.get(), "x2", c, c.x2, owned, w);
   w.dataset(g.get(), "flags", u8, c8, c.flags.data(), s1);
   w.dataset(g.get(), "level", u8, c8, c.level.data(), s1);
 }
@@ -448,8 +473,10 @@ void restore_state(const CheckpointState& ck, Cloth& cloth) {
   if (s.grid.ni != cloth.grid.ni || s.grid.nj != cloth.grid.nj)
     throw InputError("checkpoint " + ck.path + ": its grid does not match the scene's");
   cloth.z = s.z;
-  cloth.x1 = s.x1;
+  cloth.x1 = s.x1;  // the grid's: decomposing narrows them (hold_own_history)
   cloth.x2 = s.x2;
+  cloth.slot_of.clear();
+  ++cloth.held_version;
   cloth.flags = s.flags;
   cloth.level = s.level;
   cloth.step = s.step;

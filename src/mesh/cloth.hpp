@@ -9,6 +9,7 @@
 // The unknowns live in one vector z = [x (3N) | tension (2N) | moment (2N) |
 // shear (N)] so the minimizer works on a single array.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -65,7 +66,14 @@ struct Cloth {
   Grid grid;
   Layout layout;
   std::vector<double> z;         // unknowns (see Layout)
-  std::vector<double> x1, x2;    // positions at the start of this step and the one before
+  // Positions at the start of this step and the one before, 3 values for
+  // each particle this rank holds (its tiles' and its ghosts'), at slot(p):
+  // on several ranks not sized by the grid (hold_history).
+  std::vector<double> x1, x2;
+  // Each particle's slot in x1, x2 (-1: not held here); empty: every
+  // particle, at its grid id. `held_version` changes with it.
+  std::vector<int32_t> slot_of;
+  uint64_t held_version = 0;
   std::vector<double> mass;      // kg per particle: density * area it represents
   std::vector<uint8_t> flags;    // ParticleFlag per particle
   std::vector<uint8_t> level;    // AMRC level of the particle's finest leaf (0: finest)
@@ -92,6 +100,15 @@ struct Cloth {
   double* shear() { return z.data() + layout.shear(); }
   const double* shear() const { return z.data() + layout.shear(); }
 
+  int64_t slot(int64_t p) const { return slot_of.empty() ? p : int64_t(slot_of[p]); }
+  bool holds(int64_t p) const { return slot_of.empty() || slot_of[p] >= 0; }
+  // The slot map for kernels that take one (null: the grid ids).
+  const int32_t* slots() const { return slot_of.empty() ? nullptr : slot_of.data(); }
+  double* x1_at(int64_t p) { return &x1[size_t(3 * slot(p))]; }
+  const double* x1_at(int64_t p) const { return &x1[size_t(3 * slot(p))]; }
+  double* x2_at(int64_t p) { return &x2[size_t(3 * slot(p))]; }
+  const double* x2_at(int64_t p) const { return &x2[size_t(3 * slot(p))]; }
+
   bool active(int64_t p) const { return flags[p] & kActive; }
   bool free(int64_t p) const { return (flags[p] & (kActive | kFixed | kHanging)) == kActive; }
   double total_mass() const;
@@ -102,5 +119,14 @@ inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
   ids[0] = s;
   for (int k = 0; k < 3; ++k) ids[k + 1] = c.cell[k][s];
 }
+
+// Particle p's index in an array held in slots (Cloth::slots; null: p).
+inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(slot[p]) : p; }
+
+// x1, x2 for the particles `held` (ascending grid ids) only, in that order:
+// values of particles held before carried over, the others 0.
+void hold_history(Cloth& c, const std::vector<int64_t>& held);
+// The particles c holds x1, x2 for, ascending.
+std::vector<int64_t> held_particles(const Cloth& c);
 
 }  // namespace drape

@@ -111,7 +111,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) blk[3 * i + j] += s * kc[i] * kc[j];
     }
-    friction_block(m_.contact, k_z_ + 3 * p, &c_.x1[3 * p], blk);
+    friction_block(m_.contact, k_z_ + 3 * p, c_.x1_at(p), blk);
     columns(p, w, blk);
     if (m_.self_contact) self_.blocks(pos, p, k_z_, [&](int64_t q, const double* b) { columns(q, w, b); });
     const int32_t* at = g.at;

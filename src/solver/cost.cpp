@@ -294,8 +294,8 @@ void Evaluator::list_rows(bool derive) {
     axes_stale_ = anchors_stale_ = true;
     derived_stamp_ = lists_.stamp;
   }
-  if (derive && axes_stale_) freeze_bend_axes(c_.x1.data());
-  if (derive && anchors_stale_) hysteresis_anchors(c_.x1.data(), c_.z.data());
+  if (derive && axes_stale_) freeze_bend_axes(c_.x1.data(), c_.slots());
+  if (derive && anchors_stale_) hysteresis_anchors(c_.x1.data(), c_.z.data(), c_.slots());
 }
 
 void Evaluator::build_rows() {
@@ -507,13 +507,13 @@ void Evaluator::interpolate_hanging_local(double* x) const {
 // then normal to the line, so its edges stay clear of it (an edge along the
 // axis leaves the angle undefined: a corner folded onto its diagonal
 // neighbour laid one there). On an unsheared cloth nothing changes.
-void Evaluator::freeze_bend_axes(const double* x1) {
+void Evaluator::freeze_bend_axes(const double* x1, const int32_t* slot) {
   list_rows(false);
   axes_stale_ = false;
   auto tangent = [&](int64_t p, int d) {
     const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
     const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
-    V t = at(x1, b) - at(x1, a);
+    V t = at(x1, slot_in(slot, b)) - at(x1, slot_in(slot, a));
     const double len = std::sqrt(dot(t, t));
     return len > 0 ? (1.0 / len) * t : V{0, 0, 0};
   };
@@ -785,8 +785,8 @@ double Evaluator::particle_residual(int64_t p, int64_t pos, const GatherRow& row
     return 0;
   }
   const double* x = z + 3 * p;
-  const double* x1 = &c_.x1[3 * p];
-  const double* x2 = &c_.x2[3 * p];
+  const double* x1 = c_.x1_at(p);
+  const double* x2 = c_.x2_at(p);
   const double ca = it.accel, ratio = it.ratio, mass = c_.mass[p];
   const double cd = it.drag;
   double fc[3];
@@ -920,7 +920,7 @@ void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, 
   if (m_.use_newton) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
-    friction_force(m_.contact, z + 3 * p, &c_.x1[3 * p], fc, rho, jtr);
+    friction_force(m_.contact, z + 3 * p, c_.x1_at(p), fc, rho, jtr);
     if (m_.self_contact) self_.add_jtr(pos, p, z, rho_grid_.data(), jtr);
     const double mca = c_.mass[p] * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
@@ -1121,7 +1121,7 @@ void Evaluator::hanging_gradient(const double* z, double* grad) {
   hanging_into_ends(grad, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], jtr[3] = {0, 0, 0};
     contact_force(m_.contact, z + 3 * h, fc, &rho_grid_[3 * h], jtr);
-    friction_force(m_.contact, z + 3 * h, &c_.x1[3 * h], fc, &rho_grid_[3 * h], jtr);
+    friction_force(m_.contact, z + 3 * h, c_.x1_at(h), fc, &rho_grid_[3 * h], jtr);
     for (int k = 0; k < 3; ++k) v[k] = jtr[k] / m_.force_scale;
     gather_vector(row, v);
   }, 1.0, 0.0);
@@ -1129,10 +1129,13 @@ void Evaluator::hanging_gradient(const double* z, double* grad) {
 
 // ---- AMRC hanging particles -------------------------------------------------
 
-void Evaluator::interpolate_hanging(double* x) const {
+void Evaluator::interpolate_hanging(double* x, const int32_t* slot) const {
   const std::vector<HangingLink>& hl = lists_.hanging;
-  for (auto g = hl.rbegin(); g != hl.rend(); ++g)  // coarsest sides first: their ends are final
-    for (int k = 0; k < 3; ++k) x[3 * g->h + k] = (1 - g->t) * x[3 * g->a + k] + g->t * x[3 * g->b + k];
+  for (auto g = hl.rbegin(); g != hl.rend(); ++g) {  // coarsest sides first: their ends are final
+    const int64_t h = slot_in(slot, g->h), a = slot_in(slot, g->a), b = slot_in(slot, g->b);
+    if (h < 0 || a < 0 || b < 0) continue;
+    for (int k = 0; k < 3; ++k) x[3 * h + k] = (1 - g->t) * x[3 * a + k] + g->t * x[3 * b + k];
+  }
 }
 
 void Evaluator::clear_hanging(std::vector<double>& a) { std::fill(a.begin(), a.end(), 0.0); }
@@ -1198,7 +1201,7 @@ void Evaluator::hanging_forces(const double* z) {
     const size_t sh = 3 * size_t(hslot_[3 * i]), sa = 3 * size_t(hslot_[3 * i + 1]), sb = 3 * size_t(hslot_[3 * i + 2]);
     double f[3], fc[3];
     contact_force(m_.contact, z + 3 * g.h, fc);
-    friction_force(m_.contact, z + 3 * g.h, &c_.x1[3 * g.h], fc);
+    friction_force(m_.contact, z + 3 * g.h, c_.x1_at(g.h), fc);
     for (int k = 0; k < 3; ++k) f[k] = hres_[sh + k] - fc[k];
     gather_vector(hanging_row(i), f);
     for (int k = 0; k < 3; ++k) {
@@ -1310,7 +1313,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
   for_each_item(lists_.particles, pol_, [&](int64_t p, int64_t pos) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
-    slope += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
+    slope += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) slope += self_.slope_sum(pos, p, z) / 3;
     const double inertia = c_.mass[p] * ca + slope;
     double dsum = inertia * inertia * inv2;
@@ -1321,7 +1324,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
   hanging_into_ends(diag, [&](int64_t h, const GatherRow& row, double* v) {
     double fc[3], slope = 0;
     contact_force(m_.contact, z + 3 * h, fc, nullptr, nullptr, &slope);
-    slope += friction_trace(m_.contact, z + 3 * h, &c_.x1[3 * h]) / 3;
+    slope += friction_trace(m_.contact, z + 3 * h, c_.x1_at(h)) / 3;
     double dsum = slope * slope * inv2;
     gather_diagonal(row, dsum);
     v[0] = v[1] = v[2] = dsum;

@@ -122,8 +122,9 @@ class Evaluator {
   // hanging entries must be current) and the ring's forces in z current.
   // After a list change, an entry point that reads them before this is
   // called computes them from the cloth's x1 and z: they always belong to
-  // the present lists.
-  void hysteresis_anchors(const double* x1, const double* z);
+  // the present lists. x1 holds particle p at slot[p] (Cloth::slots; null:
+  // at p).
+  void hysteresis_anchors(const double* x1, const double* z, const int32_t* slot = nullptr);
   // Element slot s's anchor (kind 0 edge, 1 triple, 2 cell); NaN where s is
   // in no list.
   double anchor(int kind, int64_t s) const {
@@ -134,8 +135,9 @@ class Evaluator {
   // Each listed triple's bending axis (its own and the ring's) from the
   // positions x1, frozen until the next call: the time loop's at a step's
   // start (ghosts current). After a list change, an entry point that reads
-  // them before this is called freezes them from the cloth's x1.
-  void freeze_bend_axes(const double* x1);
+  // them before this is called freezes them from the cloth's x1 (p at
+  // slot[p]; null: at p).
+  void freeze_bend_axes(const double* x1, const int32_t* slot = nullptr);
   // The listed edges' rest lengths (list order, the ring's after this
   // rank's), laid out for the present lists: grid sequencing's eased edges
   // lengthen and relax them between steps (amrc/sequence.hpp); a list change
@@ -257,8 +259,10 @@ class Evaluator {
   // Its arrays' capacities.
   void memory(MemoryTable& t) const;
   // Puts AMRC's hanging particles (3 values per particle in x) on their
-  // coarse sides; the entry points above do it to z themselves.
-  void interpolate_hanging(double* x) const;
+  // coarse sides; the entry points above do it to z themselves. With
+  // `slot`, x holds p at slot[p] (Cloth::slots), and a link whose particles
+  // are not all held is left: nothing on this rank reads it.
+  void interpolate_hanging(double* x, const int32_t* slot = nullptr) const;
   double force_scale() const { return m_.force_scale; }
 
  private:
@@ -622,10 +626,11 @@ class Evaluator {
     ids[0] = s;
     for (int k = 0; k < 3; ++k) ids[k + 1] = nb_s_[3 * pos + k];
   }
-  // The strains the bands read (stiffness.cpp), of the element at pos.
-  double edge_strain_at(const double* x, int64_t s, int64_t pos) const;
-  double triple_curvature_at(const double* x, int64_t s, int64_t pos) const;
-  double shear_strain_at(const double* x, int64_t s, int64_t pos) const;
+  // The strains the bands read (stiffness.cpp), of the element at pos; x
+  // holds p at slot[p] (null: at p).
+  double edge_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;
+  double triple_curvature_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;
+  double shear_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;
   // assemble_stiffness's maps, for asm_stamp_'s lists: grid particle -> free
   // row (-1 else) and -> hanging index (-1 else); each hanging particle as
   // free rows and weights (hx_), and per free row the hanging particles

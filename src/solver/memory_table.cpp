@@ -22,6 +22,7 @@ void add_memory(MemoryTable& t, const Cloth& c) {
   const char* o = "Cloth";
   t.add(o, "z (positions, forces)", c.z);
   t.add(o, "x1, x2 (earlier positions)", cap(c.x1) + cap(c.x2));
+  t.add(o, "x1, x2's slots (several ranks)", c.slot_of);
   t.add(o, "mass, flags, level", cap(c.mass) + cap(c.flags) + cap(c.level));
   t.add(o, "next, prev (neighbour tables)", cap(c.next[0]) + cap(c.next[1]) + cap(c.prev[0]) + cap(c.prev[1]));
   t.add(o, "element switches", cap(c.edge_on) + cap(c.triple_on) + cap(c.shear_on));

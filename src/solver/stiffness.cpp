@@ -24,12 +24,8 @@ inline V value_of(const V3<Dual>& a) { return {a.x.v, a.y.v, a.z.v}; }
 inline V deriv_of(const V3<Dual>& a) { return {a.x.d, a.y.d, a.z.d}; }
 
 // Each element's generalized strain at positions x, as its band reads it:
-// edge strain (q: the far end), triple curvature about the frozen axis (ids:
+// edge strain (edge_strain_at), triple curvature about the frozen axis (ids:
 // previous, centre, next), shear angle (ids: the cell's corners).
-inline double edge_strain(const double* x, int64_t s, int64_t q, double rest) {
-  V g[2];
-  return edge_length(at(x, s >> 1), at(x, q), g) / rest - 1;
-}
 inline double triple_curvature(const double* x, const int64_t ids[3], const double* axis, double rest) {
   V g[3];
   return bend_angle(at(x, ids[0]), at(x, ids[1]), at(x, ids[2]), load3<double>(axis), g) / rest;
@@ -41,17 +37,20 @@ inline double shear_strain(const double* x, const int64_t ids[4]) {
 }
 }  // namespace
 
-double Evaluator::edge_strain_at(const double* x, int64_t s, int64_t pos) const {
-  return edge_strain(x, s, nb_e_[pos], rest_e_[pos]);
+double Evaluator::edge_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot) const {
+  V g[2];
+  return edge_length(at(x, slot_in(slot, s >> 1)), at(x, slot_in(slot, nb_e_[pos])), g) / rest_e_[pos] - 1;
 }
-double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos) const {
+double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos, const int32_t* slot) const {
   int64_t ids[3];
   triple_ids(s, pos, ids);
+  for (int64_t& id : ids) id = slot_in(slot, id);
   return triple_curvature(x, ids, &axis_t_[3 * pos], rest_t_[pos]);
 }
-double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos) const {
+double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot) const {
   int64_t ids[4];
   cell_ids(s, pos, ids);
+  for (int64_t& id : ids) id = slot_in(slot, id);
   return shear_strain(x, ids);
 }
 
@@ -73,28 +72,28 @@ void Evaluator::hysteresis_forces(double* z) {
       });
 }
 
-void Evaluator::hysteresis_anchors(const double* x1, const double* z) {
+void Evaluator::hysteresis_anchors(const double* x1, const double* z, const int32_t* slot) {
   // Each element's step-start force f1 (z's force slots) folded into its
   // anchor; only the active elements and the ring's, the ones that read it.
   list_rows(false);
-  if (axes_stale_) freeze_bend_axes(c_.x1.data());  // the strains read the axes
+  if (axes_stale_) freeze_bend_axes(c_.x1.data(), c_.slots());  // the strains read the axes
   anchors_stale_ = false;
   settled_ = false;  // new anchors: the kept stops are not theirs
   const Layout& L = c_.layout;
   const int64_t fo = L.tension();
   for_edges([&](int64_t s, int64_t pos) {
     const Band& b = m_.stretch[s & 1];
-    anc_e_[pos] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain_at(x1, s, pos)) : z[fo + s];
+    anc_e_[pos] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain_at(x1, s, pos, slot)) : z[fo + s];
   });
   for_triples([&](int64_t s, int64_t pos) {
     const Band& b = m_.bend[s & 1];
     const int64_t k = L.moment() - fo + s;
-    anc_t_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature_at(x1, s, pos)) : z[fo + k];
+    anc_t_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature_at(x1, s, pos, slot)) : z[fo + k];
   });
   for_shears([&](int64_t s, int64_t pos) {
     const Band& b = m_.shear;
     const int64_t k = L.shear() - fo + s;
-    anc_s_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain_at(x1, s, pos)) : z[fo + k];
+    anc_s_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain_at(x1, s, pos, slot)) : z[fo + k];
   });
 }
 
@@ -124,7 +123,7 @@ void Evaluator::contact_kept(int64_t p, const double* z, double* kc) const {
 // Adds particle p's friction block times v_p to out (nothing without friction).
 void Evaluator::add_friction_product(int64_t p, const double* z, const double* vp, double* out) const {
   double blk[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  if (!friction_block(m_.contact, z + 3 * p, &c_.x1[3 * p], blk)) return;
+  if (!friction_block(m_.contact, z + 3 * p, c_.x1_at(p), blk)) return;
   for (int i = 0; i < 3; ++i) out[i] += blk[3 * i] * vp[0] + blk[3 * i + 1] * vp[1] + blk[3 * i + 2] * vp[2];
 }
 
@@ -332,7 +331,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double mine[kKc];
     const double* kc = contact_at(p, size_t(pos), mine);
     double dsum = c_.mass[p] * inertia + kc[4] / 3;
-    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, &c_.x1[3 * p]) / 3;
+    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
     gather_diagonal(rows_[pos], dsum);
     for (int k = 0; k < 3; ++k) diag[3 * pos + k] = dsum;
@@ -342,7 +341,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     double mine[kKc];
     const double* kc = contact_at(h, size_t(&row - rows_.data()), mine);
     double dsum = kc[4] / 3;
-    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * h, &c_.x1[3 * h]) / 3;
+    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * h, c_.x1_at(h)) / 3;
     gather_diagonal(row, dsum);
     out[0] = out[1] = out[2] = dsum;
   }, 2.0, 1.0);

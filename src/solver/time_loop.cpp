@@ -34,9 +34,10 @@ void TimeLoop::memory(MemoryTable& t) const {
   cg_.memory(t);
   newton_.memory(t);
   t.add("TimeLoop", "saved unknowns (a step's retry)", z_saved_);
+  t.add("TimeLoop", "the halo's history slots", hist_send_.capacity() * 4 + hist_recv_.capacity() * 4);
 }
 
-void TimeLoop::freeze_bend_axes() { ev_.freeze_bend_axes(c_.x1.data()); }
+void TimeLoop::freeze_bend_axes() { ev_.freeze_bend_axes(c_.x1.data(), c_.slots()); }
 
 // Packed in the compact numbering of all the unknowns (Minimizer's, tile by
 // tile): a rank holds its own only.
@@ -53,13 +54,41 @@ void TimeLoop::restore_unknowns() {
   cg_.for_each_unknown(c_.layout.size(), [&](int64_t c, int64_t k) { z[k] = s[c]; });
 }
 
+// x (x1 or x2) at its ghosts from their owners. Held in slots (several
+// ranks), through the halo plan's particles' slots.
+void TimeLoop::exchange_history(double* x) {
+  if (c_.slot_of.empty()) {
+    halo_.exchange(x, Halo::kPositions);
+    return;
+  }
+  if (hist_plan_ != halo_.plan_version() || hist_held_ != c_.held_version) map_history_halo();
+  halo_.exchange_at(x, hist_send_.data(), hist_recv_.data());
+}
+
+// The plan's visitors capture one reference each: a std::function holds
+// that without allocating.
+void TimeLoop::map_history_halo() {
+  hist_plan_ = halo_.plan_version();
+  hist_held_ = c_.held_version;
+  int64_t counts[2] = {0, 0};  // received, sent
+  halo_.plan([&counts](int64_t, bool send) { ++counts[send]; });
+  fit(hist_send_, size_t(counts[1]), size_t(counts[1]), false, int32_t(-1));
+  fit(hist_recv_, size_t(counts[0]), size_t(counts[0]), false, int32_t(-1));
+  struct {
+    const Cloth& c;
+    int32_t* at[2];  // the next receive's, send's entry
+    void operator()(int64_t id, bool send) { *at[send]++ = c.holds(id) ? int32_t(c.slot(id)) : -1; }
+  } place{c_, {hist_recv_.data(), hist_send_.data()}};
+  halo_.plan([&place](int64_t id, bool send) { place(id, send); });
+}
+
 void TimeLoop::refresh_ghosts(bool history) {
   halo_.exchange(c_.z.data(), Halo::kAll);
   ev_.interpolate_hanging(c_.z.data());
   if (!history) return;
   for (std::vector<double>* x : {&c_.x1, &c_.x2}) {
-    halo_.exchange(x->data(), Halo::kPositions);
-    ev_.interpolate_hanging(x->data());
+    exchange_history(x->data());
+    ev_.interpolate_hanging(x->data(), c_.slots());
   }
 }
 
@@ -73,10 +102,8 @@ void TimeLoop::predict() {
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < L.size(); ++k) {
     const int64_t p = L.items[k];
-    for (int i = 0; i < 3; ++i) {
-      const int64_t u = 3 * p + i;
-      x[u] = c_.x1[u] + ratio * (c_.x1[u] - c_.x2[u]) + m_.gravity[i] * reach;
-    }
+    const double *x1 = c_.x1_at(p), *x2 = c_.x2_at(p);
+    for (int i = 0; i < 3; ++i) x[3 * p + i] = x1[i] + ratio * (x1[i] - x2[i]) + m_.gravity[i] * reach;
   }
 }
 
@@ -92,7 +119,7 @@ double TimeLoop::margin_overshoot() const {
 #pragma omp parallel for schedule(static) reduction(max : worst)
   for (int64_t k = 0; k < L.size(); ++k) {
     const int64_t p = L.items[k];
-    const double target = std::min(m_.contact.thickness, clearance(ob, &c_.x1[3 * p]));
+    const double target = std::min(m_.contact.thickness, clearance(ob, c_.x1_at(p)));
     worst = std::max(worst, target - clearance(ob, x + 3 * p));
   }
   return red_.max(worst);
@@ -111,7 +138,7 @@ void TimeLoop::stop_all_at_margin() {
 void TimeLoop::stop_at_margin(int64_t p) {
   const Obstacle& ob = m_.contact.obstacle;
   double* x = c_.x() + 3 * p;
-  const double* x1 = &c_.x1[3 * p];
+  const double* x1 = c_.x1_at(p);
   const double target = std::min(m_.contact.thickness, clearance(ob, x1));
   if (clearance(ob, x) >= target) return;
   const double move[3] = {x[0] - x1[0], x[1] - x1[1], x[2] - x1[2]};
@@ -156,7 +183,8 @@ void TimeLoop::accept(StepStats& st) {
     const int64_t p = L.items[k];
     double* xp = x + 3 * p;
     double dx[3];
-    for (int i = 0; i < 3; ++i) dx[i] = xp[i] - c_.x1[3 * p + i];
+    double *x1 = c_.x1_at(p), *x2 = c_.x2_at(p);
+    for (int i = 0; i < 3; ++i) dx[i] = xp[i] - x1[i];
     // Safety net: a particle that ended inside an obstacle is put back on its
     // surface, and remembers no speed into it nor any from the push.
     if (penetration(ob, xp) > 0) {
@@ -167,13 +195,13 @@ void TimeLoop::accept(StepStats& st) {
     for (int i = 0; i < 3; ++i) {
       const int64_t u = 3 * p + i;
       v2 += dx[i] * dx[i];
-      c_.x2[u] = x[u] - (1.0 - damp) * dx[i];  // damping shortens the remembered velocity
-      c_.x1[u] = x[u];
+      x2[i] = x[u] - (1.0 - damp) * dx[i];  // damping shortens the remembered velocity
+      x1[i] = x[u];
     }
     vmax = std::max(vmax, std::sqrt(v2) / c_.dt);
   }
-  ev_.interpolate_hanging(c_.x1.data());  // hanging particles follow their ends
-  ev_.interpolate_hanging(c_.x2.data());
+  ev_.interpolate_hanging(c_.x1.data(), c_.slots());  // hanging particles follow their ends
+  ev_.interpolate_hanging(c_.x2.data(), c_.slots());
   st.max_speed = red_.max(vmax);
   st.projections = red_.sum_i64(pushed);
 }
@@ -209,10 +237,10 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   // settled_cost computes the ring's forces itself, so after a migration a
   // new ghost's would otherwise be stale.
   halo_.exchange(c_.z.data(), Halo::kForces);
-  halo_.exchange(c_.x1.data(), Halo::kPositions);  // the ring's bend axes read the ghosts' x1
-  ev_.interpolate_hanging(c_.x1.data());           // ... and hanging ones whose ends were ghosts
+  exchange_history(c_.x1.data());                     // the ring's bend axes read the ghosts' x1
+  ev_.interpolate_hanging(c_.x1.data(), c_.slots());  // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();
-  ev_.hysteresis_anchors(c_.x1.data(), c_.z.data());
+  ev_.hysteresis_anchors(c_.x1.data(), c_.z.data(), c_.slots());
   CgSettings cs;
   cs.max_iterations = spec_.max_iterations;
   cs.tolerance = spec_.tolerance;

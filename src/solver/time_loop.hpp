@@ -108,6 +108,8 @@ class TimeLoop {
   void restore_unknowns();
   void accept(StepStats& st);
   void check_finite(const StepStats& st) const;
+  void exchange_history(double* x);
+  void map_history_halo();
 
   Cloth& c_;
   Model& m_;
@@ -119,6 +121,10 @@ class TimeLoop {
   Minimizer cg_;
   NewtonSolver newton_;
   std::vector<double> z_saved_;  // this rank's unknowns at the step's start, compact
+  // The halo plan's particles as slots of x1, x2 (-1: not held), sent and
+  // received, for the plan and the slots of the versions below.
+  std::vector<int32_t> hist_send_, hist_recv_;
+  uint64_t hist_plan_ = ~uint64_t(0), hist_held_ = ~uint64_t(0);
   int64_t free_ = 0;
 };
 

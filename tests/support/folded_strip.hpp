@@ -32,7 +32,10 @@ inline void fold(Simulation& w, double gap_in_h, double flat_in_h = 10) {
       double* x = &w.cloth.z[3 * g.id(i, j)];
       x[0] = i * g.hi, x[1] = y, x[2] = 0.99 * layer + z;
     }
-  for (int64_t k = 0; k < 3 * g.n(); ++k) w.cloth.x1[k] = w.cloth.x2[k] = w.cloth.z[k];
+  Cloth& c = w.cloth;
+  for (int64_t p = 0; p < g.n(); ++p)  // the history this rank holds (Cloth::slots)
+    if (c.holds(p))
+      for (int k = 0; k < 3; ++k) c.x1_at(p)[k] = c.x2_at(p)[k] = c.z[3 * p + k];
 }
 
 // With amrc, leaves up to 4 spacings wide (the flap and the lower half
