@@ -6,7 +6,8 @@
 # least once. The Newton case runs with the KES reversal and air drag on, so
 # the step-start anchors of the ring's elements read the ghosts too; the
 # slope case is it with Newton's slope line search, whose slope is a sum
-# over ranks (its path must differ from the halving one's); the kinks case
+# over ranks (its path must differ from the halving one's), and the adaptive
+# forcing, whose linear tolerance follows the cost's fall; the kinks case
 # is it with Newton's band active set, whose re-solves follow those slopes
 # and each element's own branches, the ring's too. The
 # amrc_speed case adds amrc.coarsen_speed, whose speeds each rank computes
@@ -47,7 +48,7 @@ for method in $cases; do
     amrc_speed) args+=("${amrc[@]}" --set amrc.coarsen_speed=0.01) ;;
     amrc_edges) args+=("${amrc[@]}" "${edges[@]}") ;;
     sequence) args+=("${sequence[@]}") ;;
-    slope) args+=(--set solver.method=newton --set solver.slope_line_search=true) ;;
+    slope) args+=(--set solver.method=newton --set solver.slope_line_search=true --set solver.adaptive_forcing=true) ;;
     kinks) args+=(--set solver.method=newton --set solver.band_active_set=true) ;;
     # Multigrid on several ranks runs without self-contact (refused with it).
     multigrid) args+=(--set solver.method=newton --set 'solver.preconditioner="multigrid"' --set solver.self_contact=false) ;;

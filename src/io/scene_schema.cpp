@@ -133,6 +133,13 @@ void declare_solver(ParameterList& list) {
            "which finds where a step that crosses the hysteresis bands' kinks stops descending; false: "
            "halving from the full step until the cost decreases "
            "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("true")
+      .add("adaptive_forcing", &SolverSpec::adaptive_forcing, "", any(),
+           "newton: linear tolerance from the residual's last reduction",
+           "Newton's linear solves stop at a relative tolerance of 0.9 times the square of the last Newton "
+           "iteration's residual reduction (Eisenstat-Walker), within [0.001, 0.9] and never tighter than "
+           "reaching `tolerance` needs: fewer linear iterations through the bands' kinks; "
+           "false: the residual's root mean square in particle weights, within [0.001, 0.1] "
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("true")
       .add("band_active_set", &SolverSpec::band_active_set, "", any(),
            "newton: re-solve with the band branches a full step lands on",
            "Newton through the hysteresis bands' kinks: when the full step's energy slope is not within a "

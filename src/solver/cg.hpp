@@ -27,6 +27,9 @@ struct CgSettings {
   // band branches is solved again from the same z with their secant
   // stiffness (BandActiveSet; the evaluator must track branches).
   bool active_set = false;
+  // Newton: the linear solves' tolerance follows the residual's last
+  // reduction (Eisenstat-Walker) instead of its size.
+  bool adaptive_forcing = false;
   // Asked once per iteration; true ends the minimisation (wall-clock budget,
   // signals). Must answer the same on every rank: the caller makes it collective.
   std::function<bool()> stop_requested;

@@ -317,6 +317,28 @@ double NewtonSolver::through_kinks(Evaluator& ev, double* z, double g0, Trial&& 
   return g0;
 }
 
+// Inexact Newton's forcing term, the linear solve's relative tolerance.
+// By default a loose solve far from the solution, tighter near it: the
+// residual's root mean square (in particle weights), within [1e-3, 0.1].
+// Adaptive (Eisenstat and Walker's second choice): 0.9 times the square of
+// the last iteration's residual reduction. Through the bands' kinks Newton
+// converges linearly at best, and a tight solve buys a direction that the
+// wrong branch's tangent bends anyway; this forcing is as tight as the
+// iterations lately made use of. While large it falls no faster than
+// 0.9 eta_prev^2 (one lucky iteration does not make the next solve tight),
+// and it never asks more than reaching the tolerance needs (half the
+// residual reduction left to it). At most 0.9: the step's first solve
+// (no reduction yet) takes the residual's size, as the default.
+double NewtonSolver::forcing(const CgSettings& st, double c, double c_prev, double eta_prev) {
+  if (!st.adaptive_forcing) return std::clamp(std::sqrt(c), 1e-3, 0.1);
+  constexpr double kGamma = 0.9, kMin = 1e-3, kMax = 0.9;
+  if (c_prev < 0) return std::clamp(std::sqrt(c), kMin, kMax);
+  double eta = kGamma * c / c_prev;  // c is the squared residual: (|r_k| / |r_k-1|)^2
+  if (kGamma * eta_prev * eta_prev > 0.1) eta = std::max(eta, kGamma * eta_prev * eta_prev);
+  eta = std::max(eta, 0.5 * std::sqrt(st.tolerance / c));
+  return std::clamp(eta, kMin, kMax);
+}
+
 CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, Timers& tm,
                                 const std::function<void(int, double)>& on_iteration) {
   const double norm = 1.0 / double(std::max<int64_t>(1, st.free_particles));
@@ -339,13 +361,15 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
   mg_solves_ = 0;  // a new step (or a retry): the V-cycle is built afresh,
   mg_.forget();    // from this step's K alone (restarts stay bitwise)
+  double c_prev = -1, eta_prev = 0;  // the last iteration's cost and forcing (none yet: -1)
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {
       res.stopped = true;
       break;
     }
-    // Inexact Newton: a loose solve far from the solution, tighter near it.
-    const double eta = std::clamp(std::sqrt(c0 * norm), 1e-3, 0.1);
+    const double eta = forcing(st, c0 * norm, c_prev * norm, eta_prev);
+    c_prev = c0;
+    eta_prev = eta;
     const int used = linear_solve(ev, z, st.max_iterations - res.iterations, eta, tm);
     res.iterations += std::max(1, used);
     ++res.newton_iterations;

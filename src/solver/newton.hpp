@@ -56,6 +56,10 @@ class NewtonSolver {
   // iterations; the count. d in step() afterwards (compact order).
   int linear_solve(Evaluator& ev, const double* z, int budget, double rel_tol, Timers& tm);
   const std::vector<double>& step() const { return d_; }
+  // The linear solve's relative tolerance at a Newton iteration whose cost
+  // per particle is c (c_prev the last iteration's, < 0 at a step's first;
+  // eta_prev that one's tolerance).
+  static double forcing(const CgSettings& st, double c, double c_prev, double eta_prev);
   // Its vectors' capacities (the multigrid's levels not counted).
   void memory(MemoryTable& t) const;
   // Gives its vectors back (a later solve sizes them again).

@@ -74,6 +74,7 @@ struct SolverSpec {
   int multigrid_max_iterations = 1000;  // auto: max_iterations on the multigrid's meshes
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
   bool slope_line_search = false;  // Newton's line search on the energy slope (else backtracking on the cost)
+  bool adaptive_forcing = false;  // Newton: linear tolerance from the residual's last reduction (Eisenstat-Walker)
   bool band_active_set = false;  // Newton: re-solve a step with the tangent of the band branches it lands on
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
   double drag = 0.0;            // 1/s: air drag -drag*m*v in each particle's Newton equation

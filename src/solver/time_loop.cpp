@@ -248,6 +248,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   cs.free_particles = free_;
   cs.slope_search = spec_.slope_line_search;
   cs.active_set = spec_.band_active_set;
+  cs.adaptive_forcing = spec_.adaptive_forcing;
   // A one-pointer capture: no allocation, whatever stop_requested holds.
   cs.stop_requested = [this] { return stop_requested && stop_requested(); };
   CgResult r;

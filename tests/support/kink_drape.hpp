@@ -16,7 +16,7 @@ namespace drape::test {
 
 struct KinkDrapeOutcome {
   std::string checksum;
-  int newton = 0, evaluations = 0, unconverged = 0;
+  int newton = 0, evaluations = 0, unconverged = 0, linear = 0;
 };
 
 // The 17 x 17 cloth dropped onto a 0.1 m box; with `fixed_dt`, every step
@@ -40,7 +40,7 @@ inline Scene kink_drape_scene(bool fixed_dt) {
 }
 
 // `steps` steps of scene s on `threads` threads: the Newton iterations,
-// evaluations and unconverged steps summed, and the state's checksum.
+// evaluations, linear iterations and unconverged steps summed, and the state's checksum.
 inline KinkDrapeOutcome run_kink_drape(const Scene& s, int threads, int steps) {
   omp_set_num_threads(threads);
   Simulation w(s, test_fabric());
@@ -49,6 +49,7 @@ inline KinkDrapeOutcome run_kink_drape(const Scene& s, int threads, int steps) {
     const StepStats st = w.step();
     out.newton += st.newton_iterations;
     out.evaluations += st.evaluations;
+    out.linear += st.iterations;
     out.unconverged += st.converged ? 0 : 1;
   }
   std::vector<int> all;
