@@ -3,6 +3,7 @@
 // acceleration g (sin(theta) - mu cos(theta)) when mu < tan(theta).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -64,6 +65,31 @@ TEST(Friction, HoldsTheClothWhenMuExceedsTheSlope) {
   const int steps = 100;
   for (int k = 0; k < steps; ++k) ASSERT_TRUE(w.step().converged) << "step " << k;
   EXPECT_LT(largest_slip(w, x0), steps * w.model.contact.slip);
+}
+
+// A held cloth creeps a fraction of eps a step (the lagged ramp), which at
+// 0.1 ms steps is faster than a strict rest_speed (5 mm/s against 2): the
+// rest rule counts such a creep as calm, so the tilted held cloth comes to rest.
+TEST(Friction, CreepWithinTheRampCountsAsRest) {
+  const double dt = 1e-4;
+  const auto world = resting_cloth(0.6);
+  Simulation& w = *world;
+  w.scene.solver.rest_speed = 2e-3;
+  w.scene.solver.dt_max = dt;  // from here on the fixed step is dt
+  w.loop->set_solver(w.scene.solver);
+  w.cloth.dt = dt;
+  tilt(w);
+  double fastest = 0, shortest = dt;
+  for (int k = 0; k < 300 && !w.summary().at_rest; ++k) {
+    const StepStats st = w.step();
+    ASSERT_TRUE(st.converged) << "step " << k;
+    fastest = std::max(fastest, st.max_speed);
+    shortest = std::min(shortest, st.dt);
+    w.ending(st);
+  }
+  EXPECT_TRUE(w.summary().at_rest);
+  EXPECT_GT(fastest, w.scene.solver.rest_speed);  // at rest by the creep's allowance
+  EXPECT_LT(fastest, kCreepSlips * w.model.contact.slip / shortest);
 }
 
 // mu = 0.2 < tan(20 deg): the cloth slides at g (sin - mu cos) = 1.51 m/s^2

@@ -40,6 +40,12 @@ struct RunOptions {
   const CheckpointState* restart = nullptr;  // continue from this checkpoint
 };
 
+// A step is calm (towards rest) below this speed: solver.rest_speed, or with
+// friction on, kCreepSlips slips eps a step (the creep lagged friction lets
+// a held particle make), whichever is larger.
+constexpr double kCreepSlips = 3;
+double calm_speed(const SolverSpec& sv, const Contact& c, double dt);
+
 class Simulation {
  public:
   // One rank, every tile owned, no files, no checks: the pieces on the

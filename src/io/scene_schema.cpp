@@ -151,7 +151,8 @@ void declare_solver(ParameterList& list) {
            "fraction of the velocity removed after each step").example("0.1")
       .add("rest_speed", &SolverSpec::rest_speed, "m/s", non_negative(), "m/s; > 0 stops once at rest",
            "> 0 ends the run once every particle is slower for 3 steps (and at least 2·rest_speed/g of "
-           "time); 0: never at rest").example("0.02")
+           "time); with friction on, slower than 3 friction slips a step where that is faster (held cloth "
+           "creeps); 0: never at rest").example("0.02")
       .add("contact_thickness", &SolverSpec::contact_thickness, "m", non_negative().with_note("0: automatic"),
            "m; 0 = automatic", "the contact layer; 0: half the grid spacing (a coarse mesh of grid sequencing: half its cell diagonal), or half the fabric's thickness if larger")
           .example("0.001")
