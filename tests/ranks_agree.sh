@@ -14,8 +14,8 @@
 # case starts on coarse deflection leaves, so that leaves across the box's
 # edges cut into it and split for that (the inside mask, which each rank
 # computes for its own particles): it must do so at least once. The
-# multigrid case is the Newton case with the multigrid preconditioner,
-# whose levels every rank builds from all ranks' rows of K (gathered in one
+# multigrid case is the Newton case with the multigrid preconditioner
+# (self-contact on, as by default), whose levels every rank builds from all ranks' rows of K (gathered in one
 # rank's order); it runs on 2 (with 2 threads a rank), 3 and 4 ranks, its
 # V-cycles must have run, the bytes each rank reports gathered
 # (report.json multigrid_gathered) must be its rows' and blocks' and one
@@ -49,8 +49,7 @@ for method in $cases; do
     sequence) args+=("${sequence[@]}") ;;
     slope) args+=(--set solver.method=newton --set solver.slope_line_search=true) ;;
     kinks) args+=(--set solver.method=newton --set solver.band_active_set=true) ;;
-    # Multigrid on several ranks runs without self-contact (refused with it).
-    multigrid) args+=(--set solver.method=newton --set 'solver.preconditioner="multigrid"' --set solver.self_contact=false) ;;
+    multigrid) args+=(--set solver.method=newton --set 'solver.preconditioner="multigrid"') ;;
     *) args+=(--set solver.method=$method) ;;
   esac
   if [[ $method == newton || $method == slope || $method == kinks || $method == multigrid ]]; then

@@ -161,7 +161,7 @@ const char* to_string(Preconditioner p);
 // linear iterations barely grow as the spacing halves, Jacobi's double, and
 // its longer steps pay for the builds only on fine meshes), Jacobi below,
 // and Jacobi wherever the multigrid is not allowed (several ranks with
-// AMRC or self-contact); `jacobi` and `multigrid` as they are.
+// AMRC); `jacobi` and `multigrid` as they are.
 Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles, bool multigrid_allowed);
 // The solver settings for that mesh: `auto`'s multigrid meshes take
 // multigrid_dt_max and multigrid_max_iterations (a step's linear budget
