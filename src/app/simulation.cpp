@@ -73,9 +73,10 @@ void Simulation::refuse_unsupported() const {
                      "or use \"jacobi\"");
 }
 
-// `auto` takes the multigrid on fine meshes where it may run: on several
-// ranks not with AMRC (refuse_unsupported), Jacobi there.
-bool Simulation::multigrid_allowed() const { return ranks_ == 1 || !scene.amrc.enabled; }
+// `auto` takes the multigrid on fine meshes, but not with AMRC: several
+// ranks refuse it there (refuse_unsupported), and `auto` must pick the same
+// preconditioner on any number of ranks (the same results).
+bool Simulation::multigrid_allowed() const { return !scene.amrc.enabled; }
 
 SolverSpec Simulation::mesh_solver() const {
   return stage_solver(scene.solver, sum_.active_final, multigrid_allowed());

@@ -105,7 +105,7 @@ void declare_solver(ParameterList& list) {
            "on several ranks the levels are built from all ranks' rows and run on every rank alike, bitwise one rank's "
            "result, self-contact's blocks across ranks included; not with AMRC on several ranks) ([design.md §7](design.md)); `auto`: "
            "each mesh (grid sequencing's stages) takes the multigrid from `multigrid_particles` active particles on, "
-           "Jacobi below it and wherever the multigrid may not run (several ranks with AMRC)")
+           "Jacobi below it and with AMRC (which the multigrid does not run with on several ranks: `auto` chooses alike on any number of ranks)")
           .example("multigrid")
       .add("multigrid_particles", &SolverSpec::multigrid_particles, "", at_least(1),
            "auto: active particles from which a mesh takes the multigrid",
@@ -132,7 +132,7 @@ void declare_solver(ParameterList& list) {
            "Newton's line search: regula falsi on the slope of the step's energy along the direction, "
            "which finds where a step that crosses the hysteresis bands' kinks stops descending; false: "
            "halving from the full step until the cost decreases "
-           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("true")
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("false")
       .add("band_active_set", &SolverSpec::band_active_set, "", any(),
            "newton: re-solve with the band branches a full step lands on",
            "Newton through the hysteresis bands' kinks: when the full step's energy slope is not within a "
