@@ -3,21 +3,24 @@
 # cloth split into 25 tiles by METIS, gives the same state checksum and the
 # same drape.h5 datasets and drape.png, bit for bit, with either solver; and with AMRC on,
 # where the 2- and 4-rank runs must have rebalanced (tiles migrated) at
-# least once. The Newton case runs with the KES reversal and air drag on, so
-# the step-start anchors of the ring's elements read the ghosts too; the
-# slope case is it with Newton's slope line search, whose slope is a sum
-# over ranks (its path must differ from the halving one's), and the adaptive
-# forcing, whose linear tolerance follows the cost's fall; the kinks case
-# is it with Newton's band active set, whose re-solves follow those slopes
-# and each element's own branches, the ring's too. The
+# least once. The Newton case runs Jacobi with the halving line search and
+# the KES reversal and air drag on, so the step-start anchors of the ring's
+# elements read the ghosts too; the slope case is it with Newton's slope
+# line search, whose slope is a sum over ranks (its path must differ from
+# the halving one's), and the adaptive
+# forcing, whose linear tolerance follows the cost's fall; the kinks case is it with Newton's band active set,
+# whose re-solves follow those slopes and each element's own branches, the
+# ring's too. The other cases run the default preconditioner ("auto": the
+# multigrid on the sequence case's finest mesh, Jacobi with AMRC). The
 # amrc_speed case adds amrc.coarsen_speed, whose speeds each rank computes
 # for its own particles only: it must hold back some merges. The amrc_edges
 # case starts on coarse deflection leaves, so that leaves across the box's
 # edges cut into it and split for that (the inside mask, which each rank
 # computes for its own particles): it must do so at least once. The
-# multigrid case is the Newton case with the multigrid preconditioner,
-# whose levels every rank builds from all ranks' rows of K (gathered in one
-# rank's order); it runs on 2 (with 2 threads a rank), 3 and 4 ranks, its
+# multigrid case is the Newton case with the multigrid preconditioner and
+# the slope line search (self-contact on, as by default), whose levels every
+# rank builds from all ranks' rows of K (gathered in one rank's order); it
+# runs on 2 (with 2 threads a rank), 3 and 4 ranks, its
 # V-cycles must have run, the bytes each rank reports gathered
 # (report.json multigrid_gathered) must be its rows' and blocks' and one
 # rank's none, and a 2-rank run stopped at step 20 and continued
@@ -38,6 +41,7 @@ amrc=(--set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=2 --set so
 # and at rest on the finest mesh a few steps later.
 sequence=(--set amrc.start_spacing=0.07 --set solver.rest_speed=0.03 --set amrc.stage_drag=2
           --set 'obstacle.shape="none"' --set cloth.height=0.044)
+jacobi=(--set 'solver.preconditioner="jacobi"')
 edges=(--set 'amrc.indicator="deflection"' --set amrc.refine=0.5 --set amrc.coarsen=0.1
        --set amrc.start_spacing=0.05 --set solver.steps=120 --set output.every=40)
 for method in $cases; do
@@ -48,10 +52,12 @@ for method in $cases; do
     amrc_speed) args+=("${amrc[@]}" --set amrc.coarsen_speed=0.01) ;;
     amrc_edges) args+=("${amrc[@]}" "${edges[@]}") ;;
     sequence) args+=("${sequence[@]}") ;;
-    slope) args+=(--set solver.method=newton --set solver.slope_line_search=true --set solver.adaptive_forcing=true) ;;
-    kinks) args+=(--set solver.method=newton --set solver.band_active_set=true) ;;
-    # Multigrid on several ranks runs without self-contact (refused with it).
-    multigrid) args+=(--set solver.method=newton --set 'solver.preconditioner="multigrid"' --set solver.self_contact=false) ;;
+    newton) args+=(--set solver.method=newton "${jacobi[@]}" --set solver.slope_line_search=false) ;;
+    slope) args+=(--set solver.method=newton "${jacobi[@]}" --set solver.slope_line_search=true
+                  --set solver.adaptive_forcing=true) ;;
+    kinks) args+=(--set solver.method=newton "${jacobi[@]}" --set solver.slope_line_search=false
+                  --set solver.band_active_set=true) ;;
+    multigrid) args+=(--set solver.method=newton --set 'solver.preconditioner="multigrid"') ;;
     *) args+=(--set solver.method=$method) ;;
   esac
   if [[ $method == newton || $method == slope || $method == kinks || $method == multigrid ]]; then

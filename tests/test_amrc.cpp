@@ -728,7 +728,7 @@ TEST(GridSequence, AutoPreconditionerFromAMeshSize) {
   s.multigrid_particles = 4096;
   EXPECT_EQ(stage_preconditioner(s, 4095, true), Preconditioner::Jacobi);
   EXPECT_EQ(stage_preconditioner(s, 4096, true), Preconditioner::Multigrid);
-  EXPECT_EQ(stage_preconditioner(s, 4096, false), Preconditioner::Jacobi);  // several ranks with AMRC
+  EXPECT_EQ(stage_preconditioner(s, 4096, false), Preconditioner::Jacobi);  // with AMRC
   const SolverSpec mg = stage_solver(s, 4096, true), j = stage_solver(s, 4095, true);
   EXPECT_EQ(mg.dt_max, s.multigrid_dt_max);
   EXPECT_EQ(mg.max_iterations, s.multigrid_max_iterations);

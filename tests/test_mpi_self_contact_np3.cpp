@@ -2,22 +2,28 @@
 // itself, run by the drape program's simulation on 1 rank with 2 threads,
 // on 2 and on 3 ranks (sub-communicators of the three), ends in the
 // same state checksum; its pairs reach across ranks (contact ghosts), and
-// the state differs from the same run without self-contact. The cost's
-// gradient at a pressed fold is the same on 1, 2 and 3 ranks.
+// the state differs from the same run without self-contact; with the
+// multigrid preconditioner too. The cost's gradient and K assembled (the
+// multigrid's finest level, entry by entry) at a pressed fold are the same
+// on 1, 2 and 3 ranks.
 #include <gtest/gtest.h>
 #include <mpi.h>
 #include <omp.h>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
 
 #include "decomp/collective.hpp"
 #include "solver/checksum.hpp"
+#include "solver/multigrid/block_matrix.hpp"
+#include "solver/multigrid/rank_rows.hpp"
 #include "support/folded_strip.hpp"
 
 namespace drape::test {
@@ -40,6 +46,7 @@ struct Outcome {
   int64_t in_contact = 0;      // pairs closer than the pair distance at the end, over the ranks
   uint64_t builds = 0;
   int64_t refined_near = 0;  // AMRC's splits for the other sheet nearby
+  int64_t multigrid_builds = 0;
 };
 
 // Pairs of p's listed partners in contact at the end, over this rank's particles.
@@ -61,21 +68,23 @@ int64_t pairs_in_contact(const Simulation& w) {
 // With amrc, the wide sheet folded at 16 spacings and dropped from 1.5 pair
 // distances, AMRC adapting as the program does.
 Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = SolverMethod::Newton,
-             double end = 0.06, bool amrc = false) {
+             double end = 0.06, bool amrc = false, Preconditioner pc = Preconditioner::Jacobi) {
   MPI_Comm comm;
   MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
   Outcome out;
   char sum[40] = {0};
-  int64_t counts[4] = {0, 0, 0, 0};
+  int64_t counts[5] = {0, 0, 0, 0, 0};
   if (comm != MPI_COMM_NULL) {
     omp_set_num_threads(threads);
     RunOptions opt;
     opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_" + std::to_string(ranks) +
                      (self_contact ? "_on" : "_off") +
-                     (method == SolverMethod::Cg ? "_cg" : "") + (amrc ? "_amrc" : "");
+                     (method == SolverMethod::Cg ? "_cg" : "") + (amrc ? "_amrc" : "") +
+                     (pc == Preconditioner::Multigrid ? "_mg" : "");
     opt.quiet = true;
     Scene scene = amrc ? wide_strip_scene(self_contact) : strip_scene(self_contact);
     scene.solver.method = method;
+    scene.solver.preconditioner = pc;
     Simulation w(scene, test_fabric(), opt, comm);
     if (amrc)
       fold(w, 1.5, 16);
@@ -90,16 +99,18 @@ Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = So
     counts[1] = w.red().sum_i64(pairs_in_contact(w));
     counts[2] = int64_t(sc.builds());
     counts[3] = w.summary().refined_near;
+    counts[4] = w.loop->newton().multigrid_builds();
     omp_set_num_threads(1);
     MPI_Comm_free(&comm);
   }
   quiet_bcast(sum, sizeof sum, MPI_CHAR);
-  quiet_bcast(counts, 4, MPI_INT64_T);
+  quiet_bcast(counts, 5, MPI_INT64_T);
   out.checksum = sum;
   out.contact_ghosts = counts[0];
   out.in_contact = counts[1];
   out.builds = uint64_t(counts[2]);
   out.refined_near = counts[3];
+  out.multigrid_builds = counts[4];
   return out;
 }
 
@@ -123,6 +134,24 @@ TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanks) {
   // The pairs change the state: the comparison above could fail.
   const Outcome off = drop(2, 1, false);
   EXPECT_NE(off.checksum, one.checksum);
+}
+
+// The same drop with the multigrid: its finest level is K gathered from
+// every rank's rows, contact ghosts' columns included.
+TEST(MpiSelfContact, MultigridSameStateOnOneTwoAndThreeRanks) {
+  const SolverMethod nt = SolverMethod::Newton;
+  const Preconditioner mg = Preconditioner::Multigrid;
+  const Outcome one = drop(1, 2, true, nt, 0.06, false, mg), two = drop(2, 1, true, nt, 0.06, false, mg),
+                three = drop(3, 1, true, nt, 0.06, false, mg);
+  ASSERT_FALSE(one.checksum.empty());
+  EXPECT_GT(one.in_contact, 20) << "pairs should be in contact";
+  EXPECT_GT(one.multigrid_builds, 0) << "no multigrid built";
+  EXPECT_GT(two.contact_ghosts, 0) << "no partner on another rank: the test does not cover contact ghosts";
+  EXPECT_GT(three.contact_ghosts, 0);
+  EXPECT_EQ(two.checksum, one.checksum);
+  EXPECT_EQ(three.checksum, one.checksum);
+  EXPECT_EQ(two.multigrid_builds, one.multigrid_builds);
+  EXPECT_EQ(three.multigrid_builds, one.multigrid_builds);
 }
 
 // AMRC on: the sheet starts on leaves 4 spacings wide, the near mask splits
@@ -194,6 +223,107 @@ TEST(MpiSelfContact, GradientSameOnOneTwoAndThreeRanks) {
   EXPECT_GT(std::stoll(one.substr(one.find('/') + 1)), 20) << "pairs should be in contact";
   EXPECT_EQ(pressed_gradient(2), one);
   EXPECT_EQ(pressed_gradient(3), one);
+}
+
+// K assembled at the pressed fold as the multigrid's finest level gets it:
+// on one rank as the one-rank multigrid assembles it; on several, every
+// rank's rows with global columns gathered in one rank's order (RankRows).
+// Held on world rank 0 (the sub-communicators' rank 0); the counts on every
+// rank.
+struct Gathered {
+  std::vector<int64_t> ids;  // row r's particle
+  BlockMatrix K;
+  int64_t ghost_blocks = 0;  // nonzero blocks in a contact ghost's column, over the ranks
+  int64_t in_contact = 0;
+};
+
+// Nonzero blocks of `mine` (global columns of rr) whose particle is a
+// contact ghost partner of this rank.
+int64_t contact_ghost_blocks(const BlockMatrix& mine, const RankRows& rr, const SelfContact& sc) {
+  const std::vector<int64_t>& g = sc.ghost_partners();
+  int64_t n = 0;
+  for (int64_t b = 0; b < mine.blocks(); ++b) {
+    if (!std::binary_search(g.begin(), g.end(), rr.ids()[size_t(mine.col[b])])) continue;
+    bool nonzero = false;
+    for (int k = 0; k < 9; ++k) nonzero |= mine.val[9 * b + k] != 0.0;
+    n += nonzero;
+  }
+  return n;
+}
+
+Gathered pressed_stiffness(int ranks) {
+  MPI_Comm comm;
+  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
+  Gathered out;
+  int64_t counts[2] = {0, 0};
+  if (comm != MPI_COMM_NULL) {
+    RunOptions opt;
+    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_K_" + std::to_string(ranks);
+    opt.quiet = true;
+    Simulation w(strip_scene(true), test_fabric(), opt, comm);
+    fold(w, 0.5);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int64_t k = 0; k < 3 * w.cloth.grid.n(); ++k) w.cloth.z[k] += 0.1 * kH * u(rng);
+    w.model.dt = w.model.dt_prev = 1e-3;
+    w.loop->freeze_bend_axes();
+    Evaluator& ev = w.loop->evaluator();
+    ev.hysteresis_forces(w.cloth.z.data());
+    ev.evaluate(w.cloth.z.data(), nullptr);  // Newton's order: the settled cost, then the diagonal
+    std::vector<double> diag(w.cloth.z.size());
+    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+    if (ranks == 1) {
+      ev.assemble_stiffness(out.K);
+      out.ids = w.lists.particles.items;
+    } else {
+      RankRows rr;
+      rr.number(w.red(), w.tiling, w.lists.particles.items, w.cloth.grid.n());
+      BlockMatrix mine;
+      ev.assemble_stiffness(mine, &rr.column_of(), rr.size(), 1);
+      rr.gather_matrix(w.red(), mine, out.K);
+      out.ids = rr.ids();
+      counts[0] = w.red().sum_i64(contact_ghost_blocks(mine, rr, ev.self_contact()));
+    }
+    counts[1] = w.red().sum_i64(pairs_in_contact(w));
+    MPI_Comm_free(&comm);
+  }
+  quiet_bcast(counts, 2, MPI_INT64_T);
+  out.ghost_blocks = counts[0];
+  out.in_contact = counts[1];
+  return out;
+}
+
+// a and b entry by entry, bit for bit (world rank 0 holds them).
+void expect_same_matrix(const Gathered& a, const Gathered& b, const std::string& label) {
+  if (rank() != 0) return;
+  ASSERT_EQ(a.ids, b.ids) << label;
+  ASSERT_EQ(a.K.rows, b.K.rows) << label;
+  ASSERT_EQ(a.K.start, b.K.start) << label;
+  ASSERT_EQ(a.K.col, b.K.col) << label;
+  ASSERT_EQ(a.K.val.size(), b.K.val.size()) << label;
+  int64_t differ = 0;
+  for (int64_t r = 0; r < a.K.rows; ++r)
+    for (int64_t blk = a.K.start[r]; blk < a.K.start[r + 1]; ++blk)
+      for (int k = 0; k < 9; ++k) {
+        const double x = a.K.val[9 * blk + k], y = b.K.val[9 * blk + k];
+        if (std::memcmp(&x, &y, sizeof x) == 0) continue;
+        if (differ++ < 5)
+          ADD_FAILURE() << label << ": K(" << a.ids[r] << ", " << a.ids[a.K.col[blk]] << ")[" << k << "] " << x
+                        << " vs " << y;
+      }
+  EXPECT_EQ(differ, 0) << label << ": entries that differ";
+}
+
+TEST(MpiSelfContact, AssembledStiffnessSameOnOneTwoAndThreeRanks) {
+  const Gathered one = pressed_stiffness(1), two = pressed_stiffness(2), three = pressed_stiffness(3);
+  EXPECT_GT(one.in_contact, 20) << "pairs should be in contact";
+  EXPECT_GT(two.ghost_blocks, 0) << "no contact block in another rank's column: the test does not cover them";
+  EXPECT_GT(three.ghost_blocks, 0);
+  if (rank() == 0) {
+    EXPECT_GT(one.K.rows, 0);
+  }
+  expect_same_matrix(one, two, "2 ranks");
+  expect_same_matrix(one, three, "3 ranks");
 }
 
 }  // namespace

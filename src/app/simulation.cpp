@@ -72,17 +72,12 @@ void Simulation::refuse_unsupported() const {
     throw InputError("solver.preconditioner = \"multigrid\" with amrc.enabled = true runs on one rank only "
                      "(K's rows do not yet reach another rank's hanging particles); run it without mpirun "
                      "or use \"jacobi\"");
-  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && sv.self_contact)
-    throw InputError("solver.preconditioner = \"multigrid\" with solver.self_contact = true runs on one rank "
-                     "only (K's contact blocks across ranks are not yet checked against one rank's); run it "
-                     "without mpirun, use \"jacobi\" or set solver.self_contact = false");
 }
 
-// `auto` takes the multigrid on fine meshes where it may run: on several
-// ranks not with AMRC or self-contact (refuse_unsupported), Jacobi there.
-bool Simulation::multigrid_allowed() const {
-  return ranks_ == 1 || !(scene.amrc.enabled || scene.solver.self_contact);
-}
+// `auto` takes the multigrid on fine meshes, but not with AMRC: several
+// ranks refuse it there (refuse_unsupported), and `auto` must pick the same
+// preconditioner on any number of ranks (the same results).
+bool Simulation::multigrid_allowed() const { return !scene.amrc.enabled; }
 
 SolverSpec Simulation::mesh_solver() const {
   return stage_solver(scene.solver, sum_.active_final, multigrid_allowed());

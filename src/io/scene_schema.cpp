@@ -103,9 +103,9 @@ void declare_solver(ParameterList& list) {
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
            "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; "
            "on several ranks the levels are built from all ranks' rows and run on every rank alike, bitwise one rank's "
-           "result; not with AMRC or self-contact on several ranks) ([design.md §7](design.md)); `auto`: "
+           "result, self-contact's blocks across ranks included; not with AMRC on several ranks) ([design.md §7](design.md)); `auto`: "
            "each mesh (grid sequencing's stages) takes the multigrid from `multigrid_particles` active particles on, "
-           "Jacobi below it and wherever the multigrid may not run (several ranks with AMRC or self-contact)")
+           "Jacobi below it and with AMRC (which the multigrid does not run with on several ranks: `auto` chooses alike on any number of ranks)")
           .example("multigrid")
       .add("multigrid_particles", &SolverSpec::multigrid_particles, "", at_least(1),
            "auto: active particles from which a mesh takes the multigrid",
@@ -132,7 +132,7 @@ void declare_solver(ParameterList& list) {
            "Newton's line search: regula falsi on the slope of the step's energy along the direction, "
            "which finds where a step that crosses the hysteresis bands' kinks stops descending; false: "
            "halving from the full step until the cost decreases "
-           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("true")
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff))").example("false")
       .add("adaptive_forcing", &SolverSpec::adaptive_forcing, "", any(),
            "newton: linear tolerance from the residual's last reduction",
            "Newton's linear solves stop at a relative tolerance of 0.9 times the square of the last Newton "
@@ -161,8 +161,8 @@ void declare_solver(ParameterList& list) {
            "cloth-cloth contact: two particles that are not mesh neighbours keep twice the contact layer "
            "apart ([design.md §1](design.md#1-the-cloth-model)) on any number of ranks; with AMRC, leaves "
            "near another part of the cloth split to the finest level "
-           "([design.md §2](design.md#2-amrc-and-grid-sequencing)); needs `solver.gradient = \"analytic\"`, and one "
-           "rank with `solver.preconditioner = \"multigrid\"`: false for those").example("false")
+           "([design.md §2](design.md#2-amrc-and-grid-sequencing)); needs `solver.gradient = \"analytic\"`: false "
+           "for the numeric one").example("false")
       .add("memory", &SolverSpec::memory, "", non_negative(), "weight of the force memory (hysteresis) term",
            "weight of the memory term that pulls each force to its hysteresis target").example("0.5")
       .add("drag", &SolverSpec::drag, "1/s", non_negative(), "1/s: air drag, a force -drag*m*v on each particle",

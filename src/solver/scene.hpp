@@ -65,7 +65,8 @@ struct SolverSpec {
   // newton: Newton steps solved by linear CG (fast); cg: the paper's nonlinear
   // CG on the total cost. Both stop when the same cost is below tolerance.
   SolverMethod method = SolverMethod::Newton;
-  Preconditioner preconditioner = Preconditioner::Jacobi;
+  // auto: the multigrid on fine meshes, Jacobi on coarse ones and with AMRC.
+  Preconditioner preconditioner = Preconditioner::Auto;
   // auto: a mesh with at least this many active particles takes the
   // multigrid (the default run's meshes from level 5's 1089 on, where it
   // reaches rest on less CPU than Jacobi)
@@ -73,7 +74,7 @@ struct SolverSpec {
   double multigrid_dt_max = 0.05;   // s, auto: dt_max on the multigrid's meshes (its dt follows Newton's count)
   int multigrid_max_iterations = 1000;  // auto: max_iterations on the multigrid's meshes
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
-  bool slope_line_search = false;  // Newton's line search on the energy slope (else backtracking on the cost)
+  bool slope_line_search = true;  // Newton's line search on the energy slope (else backtracking on the cost)
   bool adaptive_forcing = false;  // Newton: linear tolerance from the residual's last reduction (Eisenstat-Walker)
   bool band_active_set = false;  // Newton: re-solve a step with the tangent of the band branches it lands on
   double damping = 0.0;         // fraction of velocity removed per step, [0, 1)
@@ -161,8 +162,8 @@ const char* to_string(Preconditioner p);
 // with: `auto` takes the multigrid from solver.multigrid_particles on (its
 // linear iterations barely grow as the spacing halves, Jacobi's double, and
 // its longer steps pay for the builds only on fine meshes), Jacobi below,
-// and Jacobi wherever the multigrid is not allowed (several ranks with
-// AMRC or self-contact); `jacobi` and `multigrid` as they are.
+// and Jacobi wherever the multigrid is not allowed (with AMRC, which
+// several ranks refuse it); `jacobi` and `multigrid` as they are.
 Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles, bool multigrid_allowed);
 // The solver settings for that mesh: `auto`'s multigrid meshes take
 // multigrid_dt_max and multigrid_max_iterations (a step's linear budget
