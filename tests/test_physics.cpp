@@ -28,13 +28,16 @@ Scene small_drape() {
 }
 
 // Both minimizers (the paper's nonlinear CG and Newton with linear CG) must
-// lower the cost at every accepted iteration and reach the tolerance.
+// lower the cost at every accepted iteration and reach the tolerance. Newton
+// with its halving line search, which accepts only a lower cost (the slope
+// line search stops where the energy stops descending, and the cost may rise).
 class Minimizers : public ::testing::TestWithParam<SolverMethod> {};
 
 TEST_P(Minimizers, LowerTheCostAtEveryIterationAndConverge) {
   Scene s = small_drape();
   s.cloth.height = 0.1 + 0.0125 + 0.002;  // lands on the box: the solver has work to do
   s.solver.method = GetParam();
+  s.solver.slope_line_search = false;
   Simulation w(s, test_fabric());
   Timers tm;
   int total = 0;
