@@ -207,6 +207,51 @@ TEST(ShearLanes, FourCellsAnglesAreShearCellsBitForBit) {
   EXPECT_GT(lanes, 1000);
   EXPECT_GT(pairwise, 50);
 }
+
+// Four cells' gradients and H r side by side (shear_cells_hv_four, the
+// gradient pass's cells four at a time) are shear_cell_hv_scalar's, bit for
+// bit, cell by cell: cells from slightly to strongly sheared and folded, at
+// the finest mesh's scale and a coarse one's, zero moves among them (a fixed
+// corner's residual).
+TEST(ShearLanes, FourCellsHessianVectorIsTheScalarKernelsBitForBit) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double at[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  for (int sample = 0; sample < 3000; ++sample) {
+    V3<double> x[4][4], r[4][4], g[4][4], hr[4][4];
+    for (int l = 0; l < 4; ++l) {
+      const double amount = (sample + l) % 3 == 0 ? 0.05 : (sample + l) % 3 == 1 ? 0.4 : 0.9;
+      const double h = (sample + l) % 2 ? 1e-3 : 3e-2;
+      for (int k = 0; k < 4; ++k) {
+        x[l][k] = {h * (at[k][0] + amount * u(rng)), h * (at[k][1] + amount * u(rng)), h * amount * u(rng)};
+        r[l][k] = (sample + k) % 7 == 0 ? V3<double>{0, 0, 0} : V3<double>{u(rng), u(rng), u(rng)};
+      }
+    }
+    shear_cells_hv_four(x, r, g, hr);
+    for (int l = 0; l < 4; ++l) {
+      V3<double> g1[4], hr1[4];
+      shear_cell_hv_scalar(x[l], r[l], g1, hr1);
+      ASSERT_EQ(std::memcmp(g[l], g1, sizeof g1), 0) << "sample " << sample << " cell " << l;
+      ASSERT_EQ(std::memcmp(hr[l], hr1, sizeof hr1), 0) << "sample " << sample << " cell " << l;
+    }
+  }
+}
+
+// store_fours12 lays four elements' four 3-vectors out element after
+// element (the gradient pass's buffer entries).
+TEST(ShearLanes, StoreFoursLaysOutElementAfterElement) {
+  V4 v[4];
+  for (int k = 0; k < 4; ++k)
+    for (int l = 0; l < 4; ++l) {
+      v[k].x[l] = 100 * l + 3 * k;
+      v[k].y[l] = 100 * l + 3 * k + 1;
+      v[k].z[l] = 100 * l + 3 * k + 2;
+    }
+  double out[48];
+  store_fours12(v, out);
+  for (int l = 0; l < 4; ++l)
+    for (int j = 0; j < 12; ++j) EXPECT_EQ(out[12 * l + j], 100 * l + j) << "element " << l << " double " << j;
+}
 #endif
 
 TEST(ShearCell, AmrcCarriesTheForceAcrossSplitAndMerge) {

@@ -911,6 +911,53 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   if (double* o = force_entry(grad, 2, s, pos)) *o = A * gr / m_.force_scale + gf_s_[pos];
 }
 
+void Evaluator::shear_gradient(const ItemRun& run, const double* z, double* grad) {
+#if DRAPE_LANES
+  in_fours(
+      run, [&](int64_t k) { shear_gradient_four(run, k, z, grad); },
+      [&](int64_t k) { shear_gradient(run.items[k], run.base + k, z, grad); });
+#else
+  for (int64_t k = run.begin; k < run.end; ++k) shear_gradient(run.items[k], run.base + k, z, grad);
+#endif
+}
+
+#if DRAPE_LANES
+// shear_gradient's arithmetic cell by cell, lane by lane.
+void Evaluator::shear_gradient_four(const ItemRun& run, int64_t k, const double* z, double* grad) {
+  const int64_t* s = run.items + k;
+  const int64_t pos = run.base + k;
+  V x[4][4], r[4][4];  // corner, cell
+  double f[4];
+  for (int l = 0; l < 4; ++l) {
+    int64_t ids[4];
+    cell_ids(s[l], pos + l, ids);
+    for (int c = 0; c < 4; ++c) {
+      x[c][l] = at(z, ids[c]);
+      r[c][l] = residual_of(c_, rho_grid_, ids[c]);
+    }
+    f[l] = z[c_.layout.shear() + s[l]];
+  }
+  V4 X[4], R[4], G[4], H[4];
+  for (int c = 0; c < 4; ++c) {
+    X[c] = lanes4(x[c]);
+    R[c] = lanes4(r[c]);
+  }
+  shear_cells_hv_four(X, R, G, H);
+  const D4 A = loadu4(&area_s_[pos]), scale = splat4(m_.force_scale);
+  const D4 fa = loadu4(f) * A / scale, gq = loadu4(&gq_s_[pos]);
+  D4 gr = splat4(0.0);
+  V4 out[4];
+  for (int c = 0; c < 4; ++c) {
+    out[c] = fa * H[c] + gq * G[c];
+    gr = gr + dot(G[c], R[c]);
+  }
+  store_fours12(out, &buf_s_[kShearSlot * pos]);
+  const D4 fg = A * gr / scale + loadu4(&gf_s_[pos]);
+  for (int l = 0; l < 4; ++l)
+    if (double* o = force_entry(grad, 2, s[l], pos + l)) *o = fg[l];
+}
+#endif
+
 // ---- pass 4: gather per free particle ------------------------------------
 
 void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, const double* z, double* grad,
@@ -1064,7 +1111,7 @@ void Evaluator::gradient_as(double* grad, bool compact) {
   // as the cost pass (a fork and join each cost more than a small mesh's pass).
   elements_then_particles([&](const ItemRun& run) { edge_gradient(run, z, grad); },
                           [&](const ItemRun& run) { triple_gradient(run, z, grad); },
-                          [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); }, [] {},
+                          [&](const ItemRun& run) { shear_gradient(run, z, grad); }, [] {},
                           [&](int64_t p, int64_t pos) { particle_gradient(p, pos, rows_[pos], z, grad, it); });
   hanging_gradient(z, grad);
 }
@@ -1084,7 +1131,7 @@ CostTerms Evaluator::fused_cost_gradient(double* z, double* grad) {
   };
   auto grad_e = [&](const ItemRun& run) { edge_gradient(run, z, grad); };
   auto grad_t = [&](const ItemRun& run) { triple_gradient(run, z, grad); };
-  auto grad_s = [&](int64_t s, int64_t pos) { shear_gradient(s, pos, z, grad); };
+  auto grad_s = [&](const ItemRun& run) { shear_gradient(run, z, grad); };
   auto gather = [&](int64_t p, int64_t pos) { particle_gradient(p, pos, rows_[pos], z, grad, it); };
   ListCuts* cost_cuts[7] = {};
   ListCuts* grad_cuts[7] = {};

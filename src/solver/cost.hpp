@@ -344,6 +344,11 @@ class Evaluator {
   void triple_gradient_out(int64_t s, int64_t pos, const V3<double> r[3], const V3<double> g[3],
                            const V3<double> hr[3], const double* z, double* grad);
   void shear_gradient(int64_t s, int64_t pos, const double* z, double* grad);
+  // A run of the cells' list: with DRAPE_LANES four cells side by side
+  // (shear_gradient_four: shear_cells_hv_four), shear_gradient's numbers
+  // bit for bit; else cell by cell.
+  void shear_gradient(const ItemRun& run, const double* z, double* grad);
+  void shear_gradient_four(const ItemRun& run, int64_t k, const double* z, double* grad);
   void particle_gradient(int64_t p, int64_t pos, const GatherRow& row, const double* z, double* grad,
                          const InertiaTerms& it);
   // The entry points above, the gradient or diagonal at z's indices or in

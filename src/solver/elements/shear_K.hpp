@@ -36,28 +36,31 @@ inline void shear_terms(const V3<T>& c, const V3<T>& a, const V3<T>& b, V3<T> g[
 
 // One corner's gradient (as shear_terms) and its derivative along the
 // corner particles' moves r = [rc, ra, rb]: hr = H r. shear_terms' formulas
-// differentiated by hand; g is shear_terms', bit for bit.
-inline void shear_terms_hv(const V3<double>& c, const V3<double>& a, const V3<double>& b, const V3<double> r[3],
-                           V3<double> g[3], V3<double> hr[3]) {
-  using V = V3<double>;
+// differentiated by hand; g is shear_terms', bit for bit. T: double, or D4
+// (four cells' corners, or one cell's four corners).
+template <class T>
+inline void shear_terms_hv(const V3<T>& c, const V3<T>& a, const V3<T>& b, const V3<T> r[3], V3<T> g[3],
+                           V3<T> hr[3]) {
+  using V = V3<T>;
   const V u = a - c, v = b - c;
   const V du = r[1] - r[0], dv = r[2] - r[0];
   const V w = cross(u, v);
-  const double s = std::sqrt(dot(w, w)), co = dot(u, v);
-  const double uu = dot(u, u), vv = dot(v, v);
-  const double is = 1.0 / s, ia = 1.0 / uu, ib = 1.0 / vv;
-  const double udu = dot(u, du), vdv = dot(v, dv), dco = dot(du, v) + dot(u, dv);
-  const double ds = is * (vv * udu + uu * vdv - co * dco);  // from s^2 = |u|^2 |v|^2 - co^2
-  const double ka = co * ia, kb = co * ib;
-  const double dka = (dco - 2.0 * ka * udu) * ia, dkb = (dco - 2.0 * kb * vdv) * ib;
+  const T s = root(dot(w, w)), co = dot(u, v);
+  const T uu = dot(u, u), vv = dot(v, v);
+  const T one = num<T>(1.0), two = num<T>(2.0);
+  const T is = one / s, ia = one / uu, ib = one / vv;
+  const T udu = dot(u, du), vdv = dot(v, dv), dco = dot(du, v) + dot(u, dv);
+  const T ds = is * (vv * udu + uu * vdv - co * dco);  // from s^2 = |u|^2 |v|^2 - co^2
+  const T ka = co * ia, kb = co * ib;
+  const T dka = (dco - two * ka * udu) * ia, dkb = (dco - two * kb * vdv) * ib;
   const V gu = is * (v - ka * u), gv = is * (u - kb * v);
   // d(is t) = is (dt - ds (is t)).
   const V dgu = is * ((dv - (dka * u + ka * du)) - ds * gu);
   const V dgv = is * ((du - (dkb * v + kb * dv)) - ds * gv);
-  g[0] = -1.0 * (gu + gv);
+  g[0] = num<T>(-1.0) * (gu + gv);
   g[1] = gu;
   g[2] = gv;
-  hr[0] = -1.0 * (dgu + dgv);
+  hr[0] = num<T>(-1.0) * (dgu + dgv);
   hr[1] = dgu;
   hr[2] = dgv;
 }
@@ -225,27 +228,58 @@ inline void shear_cell_hv(const V3<double> x[4], const V3<double> r[4], V3<doubl
 #if !DRAPE_LANES
   shear_cell_hv_scalar(x, r, g, hr);
 #else
-  const V4 xc = lanes4(x, 0, 1, 2, 3), rc = lanes4(r, 0, 1, 2, 3);
-  const V4 u = shear_lanes_a(x) - xc, v = shear_lanes_b(x) - xc;
-  const V4 du = shear_lanes_a(r) - rc, dv = shear_lanes_b(r) - rc;
-  const V4 w = cross(u, v);
-  const D4 s = sqrt4(dot(w, w)), co = dot(u, v);
-  const D4 uu = dot(u, u), vv = dot(v, v);
-  const D4 one = splat4(1.0), two = splat4(2.0), wt = shear_lane_weights();
-  const D4 is = one / s, ia = one / uu, ib = one / vv;
-  const D4 udu = dot(u, du), vdv = dot(v, dv), dco = dot(du, v) + dot(u, dv);
-  const D4 ds = is * (vv * udu + uu * vdv - co * dco);
-  const D4 ka = co * ia, kb = co * ib;
-  const D4 dka = (dco - two * ka * udu) * ia, dkb = (dco - two * kb * vdv) * ib;
-  const V4 gu = is * (v - ka * u), gv = is * (u - kb * v);
-  const V4 dgu = is * ((dv - (dka * u + ka * du)) - ds * gu);
-  const V4 dgv = is * ((du - (dkb * v + kb * dv)) - ds * gv);
-  const D4 minus = splat4(-1.0);
-  const V4 gq[3] = {wt * (minus * (gu + gv)), wt * gu, wt * gv};
-  const V4 hq[3] = {wt * (minus * (dgu + dgv)), wt * dgu, wt * dgv};
+  const V4 rq[3] = {lanes4(r, 0, 1, 2, 3), shear_lanes_a(r), shear_lanes_b(r)};
+  V4 gq[3], hq[3];
+  shear_terms_hv(lanes4(x, 0, 1, 2, 3), shear_lanes_a(x), shear_lanes_b(x), rq, gq, hq);
+  const D4 wt = shear_lane_weights();
+  for (int k = 0; k < 3; ++k) {
+    gq[k] = wt * gq[k];
+    hq[k] = wt * hq[k];
+  }
   shear_lanes_add(gq, g);
   shear_lanes_add(hq, hr);
 #endif
 }
+
+#if DRAPE_LANES
+// Four cells side by side, cell l in lane l: X[k], R[k] corner k's positions
+// and moves, G[k], H[k] its gradient and H r. shear_cell_hv_scalar's
+// operations in its order (the corners one after another), lane by lane:
+// its numbers bit for bit, without the shuffles that put one cell's corners
+// in lanes and add them back (tests: ShearLanes.*).
+inline void shear_cells_hv_four(const V4 X[4], const V4 R[4], V4 G[4], V4 H[4]) {
+  const V4 zero{splat4(0.0), splat4(0.0), splat4(0.0)};
+  for (int k = 0; k < 4; ++k) G[k] = H[k] = zero;
+  for (const ShearCorner& q : kShearCorners) {
+    const V4 rq[3] = {R[q.c], R[q.a], R[q.b]};
+    V4 gq[3], hq[3];
+    shear_terms_hv(X[q.c], X[q.a], X[q.b], rq, gq, hq);
+    const D4 w = splat4(0.25 * q.sign);
+    const int at[3] = {q.c, q.a, q.b};
+    for (int k = 0; k < 3; ++k) {
+      G[at[k]] = G[at[k]] + w * gq[k];
+      H[at[k]] = H[at[k]] + w * hq[k];
+    }
+  }
+}
+
+// shear_cells_hv_four on cell-by-cell arrays (cell l's corners x[l], moves
+// r[l]; its gradient g[l] and H r hr[l]).
+inline void shear_cells_hv_four(const V3<double> x[4][4], const V3<double> r[4][4], V3<double> g[4][4],
+                                V3<double> hr[4][4]) {
+  V4 X[4], R[4], G[4], H[4];
+  for (int k = 0; k < 4; ++k) {
+    const V3<double> xk[4] = {x[0][k], x[1][k], x[2][k], x[3][k]}, rk[4] = {r[0][k], r[1][k], r[2][k], r[3][k]};
+    X[k] = lanes4(xk);
+    R[k] = lanes4(rk);
+  }
+  shear_cells_hv_four(X, R, G, H);
+  for (int l = 0; l < 4; ++l)
+    for (int k = 0; k < 4; ++k) {
+      g[l][k] = lane(G[k], l);
+      hr[l][k] = lane(H[k], l);
+    }
+}
+#endif
 
 }  // namespace drape
