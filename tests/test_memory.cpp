@@ -333,7 +333,9 @@ TEST(Memory, OneRankGathersNoLevel) {
     for (int k = 0; k < 6; ++k) solved += w.step().iterations;
     EXPECT_GT(solved, 0);
     const NewtonSolver& newton = w.loop->newton();
-    if (pc == Preconditioner::Multigrid) EXPECT_GT(newton.multigrid_builds(), 0);
+    if (pc == Preconditioner::Multigrid) {
+      EXPECT_GT(newton.multigrid_builds(), 0);
+    }
     MemoryTable t;
     w.loop->memory(t);
     EXPECT_TRUE(listed(t, kGatheredLevel));
