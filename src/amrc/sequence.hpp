@@ -31,15 +31,16 @@ struct StageTime {
 // and the preconditioner the next one takes: at least 8 times the last
 // with Jacobi next (4 times the particles, twice the linear iterations a
 // solve: halving the spacing doubles them), kMultigridStageGrowth times with the
-// multigrid next (its iterations grow 1.6 times a halving: 3.9 times from
-// 65 to 513), and the growth the last refinement showed when larger and one
-// preconditioner solved all three. A stage that starts near rest can grow
-// less than that (the default run's level 4 took 4.0 times level 5's 22 s),
-// and its successor then did not reach rest in the 430 s left. Jacobi to the
+// multigrid next (the default run's level 3 had not come to rest after 7.3
+// times level 4's 63 s, where 6.4 had let it start: 10 stops it), and the
+// growth the last refinement showed when larger and one preconditioner
+// solved all three. A stage that starts near rest can grow less than that
+// (the default run's level 4 took 4.0 times level 5's time), and its
+// successor then did not reach rest in the time left. Jacobi to the
 // multigrid (solver.preconditioner = "auto") takes the multigrid's floor:
 // the switch is meant where both cost alike on the last mesh.
 constexpr double kJacobiStageGrowth = 8.0;
-constexpr double kMultigridStageGrowth = 6.4;
+constexpr double kMultigridStageGrowth = 10.0;
 double next_stage_seconds(StageTime last, StageTime before, bool multigrid_next);
 
 }  // namespace drape
