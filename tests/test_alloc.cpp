@@ -84,8 +84,10 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrcAndSelfContact) { expect_no_allocati
 // Self-contact on one rank: the folded strip's flap dropped onto its lower
 // half from 2.4 pair distances, pair lists built again between Newton steps
 // as it falls (their partners' indices kept again) while counting.
-TEST(Allocation, NoneWithSelfContact) {
-  Simulation w(strip_scene(true), test_fabric());
+void expect_no_allocation_with_pairs(Preconditioner pc) {
+  Scene s = strip_scene(true);
+  s.solver.preconditioner = pc;
+  Simulation w(s, test_fabric());
   fold(w, 2.4);
   const SelfContact& sc = w.loop->evaluator().self_contact();
   for (int k = 0; k < 3; ++k) w.step();  // sizes every buffer, the pair list's included
@@ -100,6 +102,15 @@ TEST(Allocation, NoneWithSelfContact) {
   EXPECT_GT(sc.listed(), 0) << "no pairs listed";
   EXPECT_GT(iterations, 0);
 }
+
+TEST(Allocation, NoneWithSelfContact) { expect_no_allocation_with_pairs(Preconditioner::Jacobi); }
+
+// The same with the multigrid: K's pattern, and the coarse operators after
+// it, set again each time the pair list is built again. Disabled: Eigen's
+// LDL^T factorisation builds its permuted copy of the coarse operator at
+// each refactorisation, and the levels' prolongations are built anew with
+// each new pattern (1686 allocations in these 60 steps).
+TEST(Allocation, DISABLED_NoneWithSelfContactAndMultigrid) { expect_no_allocation_with_pairs(Preconditioner::Multigrid); }
 
 }  // namespace
 }  // namespace drape::test

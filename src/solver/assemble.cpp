@@ -7,6 +7,8 @@
 // a triple's or cell's factor g_a g_b^T, a particle's mass coefficient and
 // contact normal term. Hanging particles fold onto their ends by their
 // interpolation weights, K_free = P^T K P, as in the product.
+#include <omp.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -187,20 +189,16 @@ void Evaluator::assemble_stiffness(BlockMatrix& K, const std::vector<int32_t>* c
   if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds() || asm_column_stamp_ != column_stamp) {
     asm_pairs_ = self_.builds();
     asm_column_stamp_ = column_stamp;
-    std::vector<std::vector<int32_t>> cols;
-    cols.resize(size_t(rows));
-#pragma omp parallel for schedule(static)
-    for (int64_t r = 0; r < rows; ++r) {
-      row_terms(r, [&](int32_t c, double, const double*) { cols[r].push_back(c); });
-      std::sort(cols[r].begin(), cols[r].end());
-      cols[r].erase(std::unique(cols[r].begin(), cols[r].end()), cols[r].end());
-    }
-    K.set_pattern(cols);
+    build_pattern(K, rows, asm_scratch_, [&](int64_t r, auto&& push) {
+      row_terms(r, [&](int32_t c, double, const double*) { push(c); });
+    });
     asm_pattern_ = true;
   }
+  asm_slots_.size(omp_get_max_threads(), columns);
 #pragma omp parallel
   {
-    std::vector<int64_t> slot(size_t(columns), -1);  // column -> its block in row r (no searches)
+    // column -> its block in row r (no searches)
+    std::vector<int64_t>& slot = asm_slots_.of[size_t(omp_get_thread_num())];
 #pragma omp for schedule(static)
     for (int64_t r = 0; r < rows; ++r) {
       for (int64_t k = K.start[r]; k < K.start[r + 1]; ++k) slot[K.col[k]] = k;

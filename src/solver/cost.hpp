@@ -27,6 +27,7 @@
 #include "solver/loops.hpp"
 #include "solver/memory_table.hpp"
 #include "solver/model.hpp"
+#include "solver/multigrid/block_matrix.hpp"
 #include "solver/reducer.hpp"
 #include "solver/self_contact.hpp"
 
@@ -657,6 +658,8 @@ class Evaluator {
   uint64_t asm_stamp_ = 0, asm_pairs_ = 0;
   size_t asm_hanging_ = 0;
   bool asm_pattern_ = false;
+  PatternScratch asm_scratch_;  // K's pattern rebuilt in kept buffers
+  SlotMaps asm_slots_;
   uint64_t rows_stamp_ = 0;
   size_t rows_hanging_ = 0;
   // The own numbering (LocalNumbering) and, in list order, the local index

@@ -3,6 +3,7 @@
 // rows): the assembled stiffness K and the multigrid's coarse operators.
 // Rows are independent, so products split over threads with results that do
 // not depend on how (each row sums its blocks in column order).
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -24,8 +25,72 @@ struct BlockMatrix {
   double* block(int64_t r, int32_t c) {
     return const_cast<double*>(static_cast<const BlockMatrix*>(this)->block(r, c));
   }
-  // Rows from per-row column lists (ascending, distinct); values zero.
+  // Rows from per-row column lists (ascending, distinct); values zero. For
+  // matrices built once; rebuilt patterns use build_pattern (no allocation).
   void set_pattern(const std::vector<std::vector<int32_t>>& cols);
+};
+
+// v sized n; capacity grows by a quarter more than asked, so that patterns
+// that grow a little between rebuilds reuse the buffer.
+template <class T>
+void resize_keeping(std::vector<T>& v, size_t n) {
+  if (n > v.capacity()) v.reserve(n + n / 4);
+  v.resize(n);
+}
+
+// The listed columns of each row before they are sorted and made distinct:
+// kept between pattern rebuilds so that they allocate nothing once sized.
+struct PatternScratch {
+  std::vector<int64_t> at;    // rows + 1: row r's listed columns are col[at[r], at[r + 1])
+  std::vector<int32_t> col;
+  std::vector<int64_t> kept;  // per row: how many distinct
+};
+
+// A's pattern (values zero): `list(r, push)` calls push(c) for each column c
+// of row r, repeats allowed, the same columns each time it is called. Two
+// passes (count, then fill) into flat buffers; A's and s's capacity reused.
+template <class List>
+void build_pattern(BlockMatrix& A, int64_t rows, PatternScratch& s, List&& list) {
+  resize_keeping(s.at, size_t(rows) + 1);
+  resize_keeping(s.kept, size_t(rows));
+  s.at[0] = 0;
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    int64_t n = 0;
+    list(r, [&n](int32_t) { ++n; });
+    s.at[r + 1] = n;
+  }
+  for (int64_t r = 0; r < rows; ++r) s.at[r + 1] += s.at[r];
+  resize_keeping(s.col, size_t(s.at[rows]));
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    int32_t* b = s.col.data() + s.at[r];
+    int32_t* e = b;
+    list(r, [&e](int32_t c) { *e++ = c; });
+    std::sort(b, e);
+    s.kept[r] = std::unique(b, e) - b;
+  }
+  A.rows = rows;
+  resize_keeping(A.start, size_t(rows) + 1);
+  A.start[0] = 0;
+  for (int64_t r = 0; r < rows; ++r) A.start[r + 1] = A.start[r] + s.kept[r];
+  resize_keeping(A.col, size_t(A.start[rows]));
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r)
+    std::copy(s.col.begin() + s.at[r], s.col.begin() + s.at[r] + s.kept[r], A.col.begin() + A.start[r]);
+  resize_keeping(A.val, 9 * A.col.size());
+  std::fill(A.val.begin(), A.val.end(), 0.0);
+}
+
+// Per thread, a map from a column to its block in the current row (-1 where
+// none): sized for `cols` columns, grown only, kept between products.
+struct SlotMaps {
+  std::vector<std::vector<int64_t>> of;
+  void size(int threads, int64_t cols) {
+    if (of.size() < size_t(threads)) of.resize(size_t(threads));
+    for (auto& s : of)
+      if (s.size() < size_t(cols)) s.resize(size_t(cols), -1);  // the entries kept are -1 already
+  }
 };
 
 // y += s * B x for one 3 x 3 block.

@@ -1,5 +1,7 @@
 #include "solver/multigrid/block_product.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <vector>
 
@@ -12,29 +14,36 @@ inline void add_product(const double* __restrict a, const double* __restrict b, 
     for (int j = 0; j < 3; ++j) out[3 * i + j] += a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
 }
 
+// The scratch of the calling thread's products (the products run one at a
+// time from it): kept between calls so that rebuilt patterns allocate nothing.
+struct ProductScratch {
+  PatternScratch pattern;
+  SlotMaps slots;
+};
+ProductScratch& scratch() {
+  static thread_local ProductScratch s;
+  return s;
+}
+
 void product_pattern(const BlockMatrix& A, const BlockMatrix& B, BlockMatrix& C) {
-  std::vector<std::vector<int32_t>> cols(size_t(A.rows));
-#pragma omp parallel for schedule(static)
-  for (int64_t r = 0; r < A.rows; ++r) {
-    std::vector<int32_t>& c = cols[r];
+  build_pattern(C, A.rows, scratch().pattern, [&](int64_t r, auto&& push) {
     for (int64_t k = A.start[r]; k < A.start[r + 1]; ++k) {
       const int64_t g = A.col[k];
-      c.insert(c.end(), B.col.begin() + B.start[g], B.col.begin() + B.start[g + 1]);
+      for (int64_t b = B.start[g]; b < B.start[g + 1]; ++b) push(B.col[b]);
     }
-    std::sort(c.begin(), c.end());
-    c.erase(std::unique(c.begin(), c.end()), c.end());
-  }
-  C.set_pattern(cols);
+  });
 }
 }  // namespace
 
 void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern) {
   if (pattern) product_pattern(A, B, C);
+  SlotMaps& slots = scratch().slots;
+  slots.size(omp_get_max_threads(), cols);
 #pragma omp parallel
   {
-    // Each thread's map from a column to its block in the current row: set
+    // This thread's map from a column to its block in the current row: set
     // for the row's pattern, cleared after it (no searches).
-    std::vector<int64_t> slot(size_t(cols), -1);
+    std::vector<int64_t>& slot = slots.of[size_t(omp_get_thread_num())];
 #pragma omp for schedule(static)
     for (int64_t r = 0; r < A.rows; ++r) {
       for (int64_t k = C.start[r]; k < C.start[r + 1]; ++k) slot[C.col[k]] = k;

@@ -17,6 +17,7 @@ class CoarseSolve {
   void solve(const double* b, double* x) const;
 
  private:
+  void set_pattern(const BlockMatrix& A);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
