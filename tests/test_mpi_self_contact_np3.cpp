@@ -180,6 +180,20 @@ TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanksWithAmrc) {
   EXPECT_NE(off.checksum, one.checksum);
 }
 
+// The fold pressed to half a pair distance, its unknowns jittered alike on
+// every rank count (same seed, whole grid), the step's anchors set.
+Evaluator& press(Simulation& w) {
+  fold(w, 0.5);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int64_t k = 0; k < 3 * w.cloth.grid.n(); ++k) w.cloth.z[k] += 0.1 * kH * u(rng);
+  w.model.dt = w.model.dt_prev = 1e-3;
+  w.loop->freeze_bend_axes();
+  Evaluator& ev = w.loop->evaluator();
+  ev.hysteresis_forces(w.cloth.z.data());
+  return ev;
+}
+
 // The cost's gradient at a folded strip pressed together and jittered (as
 // test_self_contact's), hashed over the free particles with their ids: its
 // self-contact part reads the partners' residuals, which contact ghosts get
@@ -193,14 +207,7 @@ std::string pressed_gradient(int ranks) {
     opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_grad_" + std::to_string(ranks);
     opt.quiet = true;
     Simulation w(strip_scene(true), test_fabric(), opt, comm);
-    fold(w, 0.5);
-    std::mt19937_64 rng(5);
-    std::uniform_real_distribution<double> u(-1, 1);
-    for (int64_t k = 0; k < 3 * w.cloth.grid.n(); ++k) w.cloth.z[k] += 0.1 * kH * u(rng);
-    w.model.dt = w.model.dt_prev = 1e-3;
-    w.loop->freeze_bend_axes();
-    Evaluator& ev = w.loop->evaluator();
-    ev.hysteresis_forces(w.cloth.z.data());
+    Evaluator& ev = press(w);
     std::vector<double> grad(w.cloth.z.size());
     ev.evaluate(w.cloth.z.data(), grad.data());
     uint64_t h = 0;
@@ -261,14 +268,7 @@ Gathered pressed_stiffness(int ranks) {
     opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_K_" + std::to_string(ranks);
     opt.quiet = true;
     Simulation w(strip_scene(true), test_fabric(), opt, comm);
-    fold(w, 0.5);
-    std::mt19937_64 rng(5);
-    std::uniform_real_distribution<double> u(-1, 1);
-    for (int64_t k = 0; k < 3 * w.cloth.grid.n(); ++k) w.cloth.z[k] += 0.1 * kH * u(rng);
-    w.model.dt = w.model.dt_prev = 1e-3;
-    w.loop->freeze_bend_axes();
-    Evaluator& ev = w.loop->evaluator();
-    ev.hysteresis_forces(w.cloth.z.data());
+    Evaluator& ev = press(w);
     ev.evaluate(w.cloth.z.data(), nullptr);  // Newton's order: the settled cost, then the diagonal
     std::vector<double> diag(w.cloth.z.size());
     ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
