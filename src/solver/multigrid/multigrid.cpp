@@ -57,8 +57,13 @@ void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
 
 void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp) {
   a0_ = &A0;
-  const bool fresh = stamp != stamp_ || stamp == 0 || A0.rows != rows_;
-  if (fresh) build_levels(ids, ni, nj);
+  // The levels' points and transfers follow the particles alone: a new
+  // pattern of K (self-contact's pairs) keeps them and rebuilds the products.
+  const bool relevel = !levels_built_ || ni != ni_ || nj != nj_ || ids != levels_[0].ids;
+  const bool fresh = relevel || stamp != stamp_ || stamp == 0 || A0.rows != rows_;
+  if (relevel) build_levels(ids, ni, nj);
+  else if (fresh) forget();  // a new pattern's smoothers start cold, as new levels' do
+  levels_built_ = true;
   ni_ = ni;
   nj_ = nj;
   stamp_ = stamp;

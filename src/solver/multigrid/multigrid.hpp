@@ -73,10 +73,12 @@ class Multigrid {
   void set_settings(const MultigridSettings& s) {
     s_ = s;
     stamp_ = 0;
+    levels_built_ = false;
   }
   // Levels for A0, whose row r is grid particle ids[r] of an ni x nj grid.
-  // The point sets and patterns are rebuilt when `stamp` (the particle
-  // lists') changes; the values every call. A0 must outlive the next apply.
+  // The point sets and transfers are rebuilt when `ids` or the grid change,
+  // the patterns when `stamp` (K's pattern's) changes or is 0, the values
+  // every call. A0 must outlive the next apply.
   void setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp);
   // The next setup carries nothing over from earlier ones (the smoothers'
   // eigenvector estimates): a run restarted at a step builds what the
@@ -122,6 +124,7 @@ class Multigrid {
   CoarseSolve coarse_;
   std::unique_ptr<Multigrid> probe_;  // fit_cycles: the bilinear cycle that relaxes the test vectors
   uint64_t stamp_ = 0;
+  bool levels_built_ = false;
   int ni_ = 0, nj_ = 0;
   int64_t rows_ = -1;
 };
