@@ -83,14 +83,19 @@ TEST(Allocation, NoneDuringTimeStepsWithAmrcAndSelfContact) { expect_no_allocati
 
 // Self-contact on one rank: the folded strip's flap dropped onto its lower
 // half from 2.4 pair distances, pair lists built again between Newton steps
-// as it falls (their partners' indices kept again) while counting.
-void expect_no_allocation_with_pairs(Preconditioner pc) {
+// as it falls (their partners' indices kept again) while counting. `falls`
+// before counting: the steps of a whole fall, the flap then lifted again.
+void expect_no_allocation_with_pairs(Preconditioner pc, int falls = 0) {
   Scene s = strip_scene(true);
   s.solver.preconditioner = pc;
   Simulation w(s, test_fabric());
   fold(w, 2.4);
   const SelfContact& sc = w.loop->evaluator().self_contact();
   for (int k = 0; k < 3; ++k) w.step();  // sizes every buffer, the pair list's included
+  for (int f = 0; f < falls; ++f) {
+    for (int k = 0; k < 40; ++k) w.step();  // landed: 864 pairs listed after 32 steps
+    fold(w, 2.4);
+  }
   const uint64_t built = sc.builds();
   int iterations = 0;
   g_allocations = 0;
@@ -105,12 +110,13 @@ void expect_no_allocation_with_pairs(Preconditioner pc) {
 
 TEST(Allocation, NoneWithSelfContact) { expect_no_allocation_with_pairs(Preconditioner::Jacobi); }
 
-// The same with the multigrid: K's pattern, and the coarse operators after
-// it, set again each time the pair list is built again. Disabled: Eigen's
-// LDL^T factorisation builds its permuted copy of the coarse operator at
-// each refactorisation, and the levels' prolongations are built anew with
-// each new pattern (1686 allocations in these 60 steps).
-TEST(Allocation, DISABLED_NoneWithSelfContactAndMultigrid) { expect_no_allocation_with_pairs(Preconditioner::Multigrid); }
+// The same with the multigrid: K's pattern, the levels' products and the
+// coarsest level's ordering and factors set again each time the pair list
+// is built again, the levels' prolongations kept. Counted over a second
+// fall: K's and the products' patterns grow with the pair list (grow-only,
+// as the pair list's own arrays past their reserve) through the first, from
+// no pairs to 864, in 15 allocations; the second reuses them up to 1086.
+TEST(Allocation, NoneWithSelfContactAndMultigrid) { expect_no_allocation_with_pairs(Preconditioner::Multigrid, 1); }
 
 }  // namespace
 }  // namespace drape::test

@@ -546,5 +546,110 @@ TEST(Multigrid, CycleIndependentOfTheThreadCount) {
   omp_set_num_threads(1);
 }
 
+// A block Laplacian on an m x m grid, its points numbered by `order`
+// (order[g] is grid point g's row): diagonal blocks 4.1 I plus a symmetric
+// coupling of the components, -I to each grid neighbour. Symmetric
+// positive definite.
+BlockMatrix grid_laplacian(int m, const std::vector<int32_t>& order) {
+  const int n = m * m;
+  std::vector<std::vector<int32_t>> cols(static_cast<size_t>(n));
+  auto neighbours = [&](int g, auto&& f) {
+    const int i = g / m, j = g % m;
+    if (i > 0) f(g - m);
+    if (j > 0) f(g - 1);
+    if (j + 1 < m) f(g + 1);
+    if (i + 1 < m) f(g + m);
+  };
+  for (int g = 0; g < n; ++g) {
+    auto& c = cols[size_t(order[g])];
+    c.push_back(order[g]);
+    neighbours(g, [&](int h) { c.push_back(order[h]); });
+    std::sort(c.begin(), c.end());
+  }
+  BlockMatrix A;
+  A.set_pattern(cols);
+  for (int g = 0; g < n; ++g) {
+    double* d = A.block(order[g], order[g]);
+    const double diag[9] = {4.1, 0.3, 0.1, 0.3, 4.2, 0.2, 0.1, 0.2, 4.3};
+    std::copy(diag, diag + 9, d);
+    neighbours(g, [&](int h) {
+      double* o = A.block(order[g], order[h]);
+      o[0] = o[4] = o[8] = -1;
+    });
+  }
+  return A;
+}
+
+std::vector<int32_t> scrambled(int n, unsigned seed) {
+  std::vector<int32_t> order(static_cast<size_t>(n));
+  for (int g = 0; g < n; ++g) order[size_t(g)] = g;
+  std::mt19937 rng(seed);
+  std::shuffle(order.begin(), order.end(), rng);
+  return order;
+}
+
+double residual_ratio(const BlockMatrix& A, const std::vector<double>& x, const std::vector<double>& b) {
+  std::vector<double> r(b.size());
+  A.residual(b.data(), x.data(), r.data());
+  double rr = 0, bb = 0;
+  for (size_t k = 0; k < b.size(); ++k) rr += r[k] * r[k], bb += b[k] * b[k];
+  return std::sqrt(rr / bb);
+}
+
+// The coarsest level's solve on the stretched cloth's K (81 particles, the
+// size of a coarsest level) and on a block Laplacian: exact to rounding.
+TEST(CoarseSolve, SolvesToRounding) {
+  Stretched s(9);
+  const BlockMatrix L = grid_laplacian(10, scrambled(100, 7));
+  for (const BlockMatrix* A : std::vector<const BlockMatrix*>{&s.K, &L}) {
+    CoarseSolve cs;
+    cs.factor(*A, true);
+    std::vector<double> b(3 * size_t(A->rows)), x(b.size());
+    for (size_t k = 0; k < b.size(); ++k) b[k] = std::cos(0.7 * double(k)) + 0.1;
+    cs.solve(b.data(), x.data());
+    EXPECT_LT(residual_ratio(*A, x, b), 1e-12);
+    cs.solve(b.data(), b.data());  // in place
+    EXPECT_EQ(b, x);
+  }
+}
+
+// A new pattern analysed into the kept arrays, then the first again: the
+// same factors bit for bit (they follow the pattern and values alone), and
+// new values on a kept pattern solve as well.
+TEST(CoarseSolve, RefactorsAfterAnotherPatternBitForBit) {
+  const BlockMatrix A = grid_laplacian(8, scrambled(64, 1));
+  const BlockMatrix B = grid_laplacian(11, scrambled(121, 2));
+  std::vector<double> b(3 * 121);
+  for (size_t k = 0; k < b.size(); ++k) b[k] = std::sin(0.3 * double(k)) + 0.2;
+  CoarseSolve cs;
+  std::vector<double> x1(3 * 64), x2(3 * 64), y(3 * 121);
+  cs.factor(A, true);
+  cs.solve(b.data(), x1.data());
+  cs.factor(B, true);
+  cs.solve(b.data(), y.data());
+  EXPECT_LT(residual_ratio(B, y, b), 1e-12);
+  cs.factor(A, true);
+  cs.solve(b.data(), x2.data());
+  EXPECT_EQ(x1, x2);
+  BlockMatrix A2 = A;
+  for (int64_t r = 0; r < A2.rows; ++r) A2.block(r, int32_t(r))[4] += 1.0;
+  cs.factor(A2, false);
+  cs.solve(b.data(), x2.data());
+  EXPECT_LT(residual_ratio(A2, x2, std::vector<double>(b.begin(), b.begin() + 3 * 64)), 1e-12);
+}
+
+// The ordering follows the graph, not the numbering: a 10 x 10 grid
+// numbered at random factors with fewer entries than the band that row by
+// row numbering fills (each block column down to its neighbour a grid row
+// on: 10 blocks of 9 entries, about 8800 in all) would hold.
+TEST(CoarseSolve, MinimumDegreeKeepsTheFillBelowTheBand) {
+  CoarseSolve cs;
+  for (unsigned seed : {3u, 4u, 5u}) {
+    cs.factor(grid_laplacian(10, scrambled(100, seed)), true);
+    EXPECT_LT(cs.factor_entries(), 6000) << "seed " << seed;
+    EXPECT_GT(cs.factor_entries(), 3 * 100 + 9 * 180) << "seed " << seed;  // at least the blocks and the grid's edges
+  }
+}
+
 }  // namespace
 }  // namespace drape::test

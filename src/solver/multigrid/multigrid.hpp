@@ -3,7 +3,7 @@
 // step's preconditioner: levels of the free particles on every 2^l-th grid
 // line (transfer.hpp), coarse operators by Galerkin product P^T A P, a
 // Chebyshev smoother (smoother.hpp) or block lines (line_smoother.hpp), and
-// the coarsest level solved by Eigen (coarse_solve.hpp). One V-cycle from zero is the preconditioner: a
+// the coarsest level solved by a sparse LDL^T (coarse_solve.hpp). One V-cycle from zero is the preconditioner: a
 // symmetric positive definite operator, as linear CG needs. Everything sums
 // in fixed orders: the same result on any thread count.
 #include <cstdint>
