@@ -50,6 +50,7 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
     sum_.stages.push_back(
         {cloth.step, cloth.time, sequence_level_, sum_.active_final, stage_preconditioner_name()});
   if (opt_.restart) loop->minimizer().set_first_step(opt_.restart->counters.cg_first_step);
+  if (opt_.restart) restore_easing(opt_.restart->eased);
   own_blocks();
 }
 
@@ -169,6 +170,14 @@ void Simulation::rebuild_lists() {
 }
 
 // Each rank writes its own tiles' blocks of every collective file.
+// A checkpoint inside grid sequencing's easing window goes on with the
+// rest lengths eased so far, as the uninterrupted run does.
+void Simulation::restore_easing(const EasedEdges& eased) {
+  if (eased.rest.empty()) return;
+  ease_until_ = eased.until;
+  restore_eased_edges(loop->evaluator(), eased.rest.data());
+}
+
 void Simulation::own_blocks() {
   blocks_.clear();
   for (int t : dec_.owned) {

@@ -123,6 +123,8 @@ class Simulation {
   void rebuild_lists();
   void mesh_changed(bool new_stage);
   void own_blocks();
+  void restore_easing(const EasedEdges& eased);
+  EasedEdges easing();
   void make_output_dir() const;
   void open_output();
   void write_frame();

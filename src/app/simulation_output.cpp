@@ -134,9 +134,20 @@ void Simulation::checkpoint() {
   ScopedPhase ph(tm_, kOutput);
   sum_.counters.cg_first_step = loop->minimizer().first_step();
   write_checkpoint(opt_.output_dir, comm_, cloth, blocks_, opt_.scene_toml, fabric, sum_.counters,
-                   amrc ? amrc->tree().levels() : std::vector<uint8_t>{});
+                   amrc ? amrc->tree().levels() : std::vector<uint8_t>{}, easing());
   sum_.checkpoint = opt_.output_dir + "/checkpoint.h5";
   last_checkpoint_ = cloth.step;
+}
+
+// Inside grid sequencing's easing window, the edges' rest lengths as eased
+// so far (this rank's own slots); outside it, nothing.
+EasedEdges Simulation::easing() {
+  EasedEdges e;
+  if (!(cloth.time < ease_until_)) return e;
+  e.until = ease_until_;
+  e.rest.assign(size_t(2 * cloth.grid.n()), 0.0);
+  eased_rest_by_slot(loop->evaluator(), e.rest.data());
+  return e;
 }
 
 void Simulation::finish() {

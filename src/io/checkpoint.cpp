@@ -30,13 +30,16 @@ using namespace h5;
 namespace {
 
 const char* const kFormat = "drape checkpoint";
-const int64_t kFormatVersion = 5;  // 2: counters gained particle_iterations; 3: shear read on crosses; 4: on cells;
-                                   // 5: counters gained newton_iterations
+const int64_t kFormatVersion = 6;  // 2: counters gained particle_iterations; 3: shear read on crosses; 4: on cells;
+                                   // 5: counters gained newton_iterations; 6: eased edges
+// Version 5 reads as 6 with no edge easing (its digest is the same then).
+const int64_t kOldestReadable = 5;
 
 // ------------------------------------------------------------ the digest --
 
-// Sum over the given blocks of a hash of everything a particle carries.
-uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks) {
+// Sum over the given blocks of a hash of everything a particle carries
+// (its edges' eased rest lengths too, when given).
+uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks, const std::vector<double>& eased) {
   const int64_t n = c.grid.n();
   uint64_t sum = 0;
   for (const Block& b : blocks)
@@ -57,6 +60,10 @@ uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks) {
         h.add(c.z[7 * n + p]);
         h.add(uint64_t(c.flags[p]));
         h.add(uint64_t(c.level[p]));
+        if (!eased.empty()) {
+          h.add(eased[size_t(2 * p)]);
+          h.add(eased[size_t(2 * p + 1)]);
+        }
         sum += h.value();
       }
   return sum;
@@ -113,7 +120,7 @@ RunCounters counters_from(const std::vector<double>& v) {
 
 // Everything that is not per particle.
 uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const RunCounters& r,
-                   const std::vector<uint8_t>& levels) {
+                   const std::vector<uint8_t>& levels, const EasedEdges& eased) {
   Hasher h(0xa4093822299f31d0ULL);
   h.add(uint64_t(c.grid.ni));
   h.add(uint64_t(c.grid.nj));
@@ -127,6 +134,7 @@ uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const
   for (double v : counter_numbers(r)) h.add(v);
   h.add(uint64_t(levels.size()));
   for (uint8_t l : levels) h.add(uint64_t(l));
+  if (!eased.rest.empty()) h.add(eased.until);
   return h.value();
 }
 
@@ -205,7 +213,8 @@ void write_history(hid_t group, const std::string& name, const Cloth& c, const s
   w.dataset(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, packed.data(), s);
 }
 
-void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, const Writer& w) {
+void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, const std::vector<double>& eased,
+                 const Writer& w) {
   Handle g = w.group(root, "state");
   const int ni = c.grid.ni, nj = c.grid.nj;
   const Selection s1 = select_blocks(owned, ni, nj, 1);
@@ -220,11 +229,12 @@ void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, co
   write_history(g.get(), "x2", c, c.x2, owned, w);
   w.dataset(g.get(), "flags", u8, c8, c.flags.data(), s1);
   w.dataset(g.get(), "level", u8, c8, c.level.data(), s1);
+  if (!eased.empty()) w.dataset(g.get(), "eased_rest", f64, d, eased.data(), s2);
 }
 
 // The bytes a checkpoint's datasets and attributes hold, HDF5's metadata aside.
-int64_t checkpoint_bytes(const Cloth& c, const std::string& toml, Fabric fabric, size_t levels) {
-  int64_t bytes = 114 * c.grid.n();  // 14 doubles and 2 bytes per particle
+int64_t checkpoint_bytes(const Cloth& c, const std::string& toml, Fabric fabric, size_t levels, bool eased) {
+  int64_t bytes = (eased ? 130 : 114) * c.grid.n();  // 14 (16 eased) doubles and 2 bytes per particle
   for (auto& [name, curve] : curves_of(fabric)) bytes += 16 * int64_t(curve->q.size());
   bytes += 8 * int64_t(fabric_numbers(fabric).size() + counter_numbers(RunCounters{}).size());
   return bytes + int64_t(toml.size() + fabric.name.size() + fabric.source.size() + levels);
@@ -257,11 +267,11 @@ void sync_file(const std::string& path) {
 void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
                       const std::vector<Block>& owned, const std::string& scene_toml,
                       const Fabric& fabric, const RunCounters& counters,
-                      const std::vector<uint8_t>& amrc_levels) {
+                      const std::vector<uint8_t>& amrc_levels, const EasedEdges& eased) {
   const int rank = rank_of(comm);
   const std::string path = dir + "/checkpoint.h5", tmp = path + ".tmp";
-  const uint64_t total = sum_over_ranks(comm, state_sum(cloth, owned));
-  const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters, amrc_levels));
+  const uint64_t total = sum_over_ranks(comm, state_sum(cloth, owned, eased.rest));
+  const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters, amrc_levels, eased));
 
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   try {
@@ -280,7 +290,8 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
     // leave a file that cannot be closed (reserve.hpp).
     agreed_write(comm, tmp, [&] {
       if (rank == 0)
-        reserve_file_space(tmp, 0, with_metadata_margin(checkpoint_bytes(cloth, scene_toml, fabric, amrc_levels.size())));
+        reserve_file_space(tmp, 0, with_metadata_margin(checkpoint_bytes(cloth, scene_toml, fabric, amrc_levels.size(),
+                                                                         !eased.rest.empty())));
     });
     const hid_t root = file.get();
     agreed_write(comm, tmp, [&] {
@@ -296,11 +307,12 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
       put_string(root, "scene_toml", scene_toml);
       const std::vector<double> cn = counter_numbers(counters);
       put_numbers(root, "counters", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, cn.data(), cn.size());
+      if (!eased.rest.empty()) put_double(root, "ease_until", eased.until);
       put_string(root, "digest", hex(digest));
     });
     const Writer w{comm, tmp, dxpl.get()};
     stall_for_test("before-data", rank);
-    write_state(root, cloth, owned, w);
+    write_state(root, cloth, owned, eased.rest, w);
     stall_for_test("mid-data", rank);
     write_fabric(root, fabric, rank, w);
     if (!amrc_levels.empty()) {  // rank 0 writes the whole (replicated) tree
@@ -403,6 +415,17 @@ void read_state(hid_t root, Cloth& c) {
   read_dataset(g.get(), "level", u8, c.level.data(), n);
 }
 
+// Grid sequencing's eased edges, where the run was inside their window.
+EasedEdges read_eased(hid_t root, int64_t n) {
+  EasedEdges e;
+  Handle g(check(H5Gopen2(root, "state", H5P_DEFAULT), "opening group 'state'"), H5Gclose);
+  if (H5Lexists(g.get(), "eased_rest", H5P_DEFAULT) <= 0) return e;
+  e.until = get_double(root, "ease_until");
+  e.rest.assign(size_t(2 * n), 0.0);
+  read_dataset(g.get(), "eased_rest", H5T_NATIVE_DOUBLE, e.rest.data(), e.rest.size());
+  return e;
+}
+
 CheckpointState read_verified(const std::string& path) {
   CheckpointState ck;
   ck.path = path;
@@ -414,9 +437,9 @@ CheckpointState read_verified(const std::string& path) {
     throw InputError("is an HDF5 file but not a drape checkpoint (no format = \"" +
                      std::string(kFormat) + "\" attribute; drape.h5 outputs cannot be restarted from)");
   const int64_t version = get_int(root, "format_version");
-  if (version != kFormatVersion)
-    throw InputError("has checkpoint format version " + std::to_string(version) + "; this drape reads version " +
-                     std::to_string(kFormatVersion));
+  if (version < kOldestReadable || version > kFormatVersion)
+    throw InputError("has checkpoint format version " + std::to_string(version) + "; this drape reads versions " +
+                     std::to_string(kOldestReadable) + " to " + std::to_string(kFormatVersion));
   const int64_t ni = get_int(root, "ni"), nj = get_int(root, "nj"), step = get_int(root, "step");
   if (ni < 3 || nj < 3 || ni * nj > INT32_MAX || step < 0)
     throw InputError("holds an impossible grid " + std::to_string(ni) + " x " + std::to_string(nj) +
@@ -435,13 +458,14 @@ CheckpointState read_verified(const std::string& path) {
   get_numbers(root, "counters", H5T_NATIVE_DOUBLE, cn.data(), cn.size());
   ck.counters = counters_from(cn);
   read_state(root, c);
+  ck.eased = read_eased(root, c.grid.n());
   ck.fabric = read_fabric(root);
   if (H5Lexists(root, "amrc_levels", H5P_DEFAULT) > 0) {
     ck.amrc_levels.resize(size_t(ni - 1) * (nj - 1));
     read_dataset(root, "amrc_levels", H5T_NATIVE_UINT8, ck.amrc_levels.data(), ck.amrc_levels.size());
   }
-  const uint64_t digest = Hasher::mix(state_sum(c, {Block{0, c.grid.ni, 0, c.grid.nj}}) ^
-                                      meta_hash(c, ck.scene_toml, ck.fabric, ck.counters, ck.amrc_levels));
+  const uint64_t digest = Hasher::mix(state_sum(c, {Block{0, c.grid.ni, 0, c.grid.nj}}, ck.eased.rest) ^
+                                      meta_hash(c, ck.scene_toml, ck.fabric, ck.counters, ck.amrc_levels, ck.eased));
   if (hex(digest) != get_string(root, "digest"))
     throw InputError("its contents do not match its digest (the file is damaged)");
   return ck;

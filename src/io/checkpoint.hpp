@@ -8,7 +8,10 @@
 //                drape_version, ni, nj, step, time, dt, dt_prev, scene_toml,
 //                counters (RunCounters), digest (see below)
 //   /state/      positions, tension, moment, shear (the unknowns z), x1, x2
-//                (the step history), flags, level: (NI x NJ [x C]) arrays
+//                (the step history), flags, level: (NI x NJ [x C]) arrays;
+//                eased_rest (NI x NJ x 2), only while grid sequencing's edges
+//                ease: edge slot 2p + d's rest length (0 where none is
+//                listed), with the root attribute ease_until (s)
 //   /fabric/     attributes name, source; dataset numbers (KES values, SI);
 //                one (n x 2) dataset per measured curve
 //   /amrc_levels the AMRC tree: leaf level per finest interval, (NI-1 x NJ-1),
@@ -44,22 +47,33 @@ struct RunCounters {
   int64_t newton_iterations = 0;  // Newton steps (solver.method = newton; iterations are then linear CG's)
 };
 
+// Grid sequencing's eased edges (amrc/sequence.hpp): until when they relax,
+// and each edge slot's rest length as eased so far (2 per particle, grid
+// order, 0 where none is listed; empty when none eases). A restart inside
+// the window must continue from these, not from the material's lengths.
+struct EasedEdges {
+  double until = 0;
+  std::vector<double> rest;
+};
+
 struct CheckpointState {
   std::string path;
   std::string scene_toml;
   Fabric fabric;
   RunCounters counters;
   std::vector<uint8_t> amrc_levels;  // empty without AMRC
+  EasedEdges eased;
   // Grid, unknowns, history, flags, levels, step, time, dt, dt_prev; the
   // rest of the cloth is rebuilt from the scene and the flags.
   Cloth cloth;
 };
 
-// Collective over `comm`. `owned`: the blocks this rank writes.
+// Collective over `comm`. `owned`: the blocks this rank writes (eased.rest,
+// when not empty, is grid-sized with at least the owned blocks' slots set).
 void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
                       const std::vector<Block>& owned, const std::string& scene_toml,
                       const Fabric& fabric, const RunCounters& counters,
-                      const std::vector<uint8_t>& amrc_levels = {});
+                      const std::vector<uint8_t>& amrc_levels = {}, const EasedEdges& eased = {});
 
 // Reads and verifies a checkpoint on this rank alone. Throws InputError
 // naming the file and what is wrong with it.
