@@ -119,7 +119,8 @@ TEST(MemoryNp2, HistoryHoldsItsOwnTilesAndGhosts) {
 
 // The multigrid on two ranks: each rank receives every rank's rows of K
 // at a build (a row's length, 8 bytes, and a block's column and values,
-// 4 + 72) and a V-cycle's right-hand side (24 bytes a free particle), and
+// 4 + 72) and, its finest level divided, level 1's right-hand side at a
+// V-cycle (24 bytes a level-1 particle), and
 // holds them, with the V-cycle's result, in the gathered level's row
 // (whose 0 with Jacobi the test above checks).
 TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
@@ -144,7 +145,13 @@ TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
   const int64_t rows = finest.points, blocks = finest.blocks;
   EXPECT_GT(rows, lists.particles.size());  // the other rank's rows too
   EXPECT_EQ(newton.multigrid_build_bytes(), 76 * blocks + 8 * rows);
-  EXPECT_EQ(newton.multigrid_cycle_bytes(), 24 * rows);
+  // The finest level divided: a cycle gathers level 1's right-hand side
+  // only, and exchanges the ghosts' entries (24 bytes each a time).
+  ASSERT_GE(newton.multigrid_stats().size(), 2u);
+  EXPECT_EQ(newton.multigrid_cycle_bytes(), 24 * newton.multigrid_stats()[1].points);
+  EXPECT_GT(newton.multigrid_ghosts(), 0);
+  EXPECT_GT(newton.multigrid_exchanged_bytes(), 0);
+  EXPECT_EQ(newton.multigrid_exchanged_bytes() % (24 * newton.multigrid_ghosts()), 0);
   // The pattern stays (no AMRC, no self-contact): every build the same bytes.
   EXPECT_EQ(newton.multigrid_builds_bytes(), newton.multigrid_builds() * newton.multigrid_build_bytes());
   EXPECT_EQ(newton.multigrid_cycles_bytes(), finest.cycles * newton.multigrid_cycle_bytes());

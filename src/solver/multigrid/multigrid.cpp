@@ -8,6 +8,7 @@
 namespace drape {
 
 void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
+  ++levels_built_;
   levels_.clear();
   levels_.emplace_back();
   levels_[0].ids = ids;
