@@ -168,5 +168,40 @@ TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
   EXPECT_GE(held, size_t(76 * blocks + 8 * (rows + 1) + vectors + maps));
 }
 
+// The whole cycle gathered on request (solver.multigrid_divided = false,
+// the reference): each rank gathers the whole right-hand side (24 bytes a
+// free particle a cycle) and exchanges nothing, and the own particles end
+// where the divided cycle's do, bit for bit.
+TEST(MemoryNp2, MultigridGathersTheWholeCycleOnRequest) {
+  Scene s;
+  s.cloth.particles = {33, 33};
+  s.cloth.tile = 8;
+  s.cloth.height = 0.401;
+  s.solver.method = SolverMethod::Newton;
+  s.solver.preconditioner = Preconditioner::Multigrid;
+  const Fabric f = test_fabric();
+  RankRun divided(s, f);
+  s.solver.multigrid_divided = false;
+  RankRun whole(s, f);
+  Timers tm;
+  for (int k = 0; k < 6; ++k) {
+    divided.loop->step(tm);
+    whole.loop->step(tm);
+  }
+  const NewtonSolver& nw = whole.loop->newton();
+  const NewtonSolver& nd = divided.loop->newton();
+  ASSERT_GT(nw.multigrid_stats().size(), 1u);
+  ASSERT_GT(nw.multigrid_stats()[0].cycles, 0);
+  EXPECT_EQ(nw.multigrid_cycle_bytes(), 24 * nw.multigrid_stats()[0].points);
+  EXPECT_EQ(nw.multigrid_exchanged_bytes(), 0);
+  EXPECT_GT(nd.multigrid_exchanged_bytes(), 0);
+  EXPECT_EQ(nw.multigrid_stats()[0].cycles, nd.multigrid_stats()[0].cycles);
+  int64_t differ = 0;
+  for (int64_t p : divided.lists.particles.items)
+    for (int k = 0; k < 3; ++k) differ += divided.cloth.z[3 * p + k] != whole.cloth.z[3 * p + k];
+  EXPECT_GT(divided.lists.particles.size(), 0);
+  EXPECT_EQ(differ, 0) << "own particles differ between the divided and the whole cycle";
+}
+
 }  // namespace
 }  // namespace drape::test

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <stdexcept>
 
 #include "solver/multigrid/block_matrix.hpp"
@@ -103,16 +104,30 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
   ranks_.gather_matrix(red, k_, kg_);
   mg_builds_bytes_ += ranks_.matrix_bytes();
   mg_.setup(kg_, ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
-  if (mg_.finest_by_points() && (renumber || !div_.planned(mg_))) div_.plan(red, ranks_, k_, mg_);
+  if (divided_on_ && mg_.finest_by_points() && (renumber || !div_.planned(mg_))) div_.plan(red, ranks_, k_, mg_);
 }
 
 // The finest level divided over the ranks (DividedLevel), where it is
 // smoothed by points; else the whole cycle gathered.
 bool NewtonSolver::divided() const {
-  return dots_.reducer().ranks() > 1 && mg_.finest_by_points() && div_.planned(mg_);
+  return divided_on_ && dots_.reducer().ranks() > 1 && mg_.finest_by_points() && div_.planned(mg_);
 }
 
+namespace {
+double process_cpu() {
+  timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+}  // namespace
+
 void NewtonSolver::precondition(const double* r, double* s) {
+  const double c0 = process_cpu();
+  apply_preconditioner(r, s);
+  pc_cpu_ += process_cpu() - c0;
+}
+
+void NewtonSolver::apply_preconditioner(const double* r, double* s) {
   if (dots_.reducer().ranks() == 1) {
     mg_.apply(r, s);
     return;
