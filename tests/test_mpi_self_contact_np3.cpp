@@ -362,7 +362,7 @@ Divided divided_cycle(int ranks, const MultigridSettings& ms) {
     Multigrid mg(ms);
     mg.setup(all, rr.ids(), w.cloth.grid.ni, w.cloth.grid.nj, 1);
     DividedLevel dl;
-    dl.plan(red, rr, mine, mg);
+    dl.plan(red, rr, mine, all, mg);
     const int64_t n = rr.size(), own = mine.rows;
     std::mt19937_64 rng(11);
     std::uniform_real_distribution<double> u(-1, 1);
@@ -375,7 +375,7 @@ Divided divided_cycle(int ranks, const MultigridSettings& ms) {
     for (int round = 0; round < 2; ++round) {  // the second from the first's leftovers
       mg.apply(b.data(), x.data());
       rr.take_mine(x.data(), want.data());
-      dl.apply(red, mine, mg, b_mine.data(), got.data());
+      dl.apply(red, mine, all, mg, b_mine.data(), got.data());
       for (int64_t k = 0; k < 3 * own; ++k) differ += std::memcmp(&want[k], &got[k], sizeof(double)) != 0;
       for (double& v : b_mine) v *= -0.5;
       for (double& v : b) v *= -0.5;

@@ -104,7 +104,7 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
   ranks_.gather_matrix(red, k_, kg_);
   mg_builds_bytes_ += ranks_.matrix_bytes();
   mg_.setup(kg_, ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
-  if (divided_on_ && mg_.finest_by_points() && (renumber || !div_.planned(mg_))) div_.plan(red, ranks_, k_, mg_);
+  if (divided_on_ && mg_.finest_by_points() && (renumber || !div_.planned(mg_))) div_.plan(red, ranks_, k_, kg_, mg_);
 }
 
 // The finest level divided over the ranks (DividedLevel), where it is
@@ -133,7 +133,7 @@ void NewtonSolver::apply_preconditioner(const double* r, double* s) {
     return;
   }
   if (divided()) {
-    div_.apply(dots_.reducer(), k_, mg_, r, s);
+    div_.apply(dots_.reducer(), k_, kg_, mg_, r, s);
     mg_cycles_bytes_ += div_.gathered_bytes();
     return;
   }

@@ -27,6 +27,7 @@ class Chebyshev {
   void smooth_rows(int64_t rows, const double* b, double* x, bool zero, Residual&& residual, Dinv&& dinv, double* r,
                    double* d, double* z) const;
   double lambda_max() const { return lmax_; }
+  int degree() const { return degree_; }
   // The power iteration's estimate of D^-1 A's spectral radius, and D^-1
   // (9 a row): the smoothed prolongation's step.
   double estimate() const { return estimate_; }
