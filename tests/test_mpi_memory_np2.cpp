@@ -119,7 +119,8 @@ TEST(MemoryNp2, HistoryHoldsItsOwnTilesAndGhosts) {
 
 // The multigrid on two ranks: each rank receives every rank's rows of K
 // at a build (a row's length, 8 bytes, and a block's column and values,
-// 4 + 72) and a V-cycle's right-hand side (24 bytes a free particle), and
+// 4 + 72) and, its finest level divided, level 1's right-hand side at a
+// V-cycle (24 bytes a level-1 particle), and
 // holds them, with the V-cycle's result, in the gathered level's row
 // (whose 0 with Jacobi the test above checks).
 TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
@@ -144,7 +145,13 @@ TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
   const int64_t rows = finest.points, blocks = finest.blocks;
   EXPECT_GT(rows, lists.particles.size());  // the other rank's rows too
   EXPECT_EQ(newton.multigrid_build_bytes(), 76 * blocks + 8 * rows);
-  EXPECT_EQ(newton.multigrid_cycle_bytes(), 24 * rows);
+  // The finest level divided: a cycle gathers level 1's right-hand side
+  // only, and exchanges the ghosts' entries (24 bytes each a time).
+  ASSERT_GE(newton.multigrid_stats().size(), 2u);
+  EXPECT_EQ(newton.multigrid_cycle_bytes(), 24 * newton.multigrid_stats()[1].points);
+  EXPECT_GT(newton.multigrid_ghosts(), 0);
+  EXPECT_GT(newton.multigrid_exchanged_bytes(), 0);
+  EXPECT_EQ(newton.multigrid_exchanged_bytes() % (24 * newton.multigrid_ghosts()), 0);
   // The pattern stays (no AMRC, no self-contact): every build the same bytes.
   EXPECT_EQ(newton.multigrid_builds_bytes(), newton.multigrid_builds() * newton.multigrid_build_bytes());
   EXPECT_EQ(newton.multigrid_cycles_bytes(), finest.cycles * newton.multigrid_cycle_bytes());
@@ -159,6 +166,41 @@ TEST(MemoryNp2, MultigridGathersTheFinestLevel) {
   // starts (8 bytes a row each), the grid's column numbers (4 a particle).
   const int64_t vectors = 3 * 24 * rows, maps = 3 * 8 * rows + 8 + 4 * cloth.grid.n();
   EXPECT_GE(held, size_t(76 * blocks + 8 * (rows + 1) + vectors + maps));
+}
+
+// The whole cycle gathered on request (solver.multigrid_divided = false,
+// the reference): each rank gathers the whole right-hand side (24 bytes a
+// free particle a cycle) and exchanges nothing, and the own particles end
+// where the divided cycle's do, bit for bit.
+TEST(MemoryNp2, MultigridGathersTheWholeCycleOnRequest) {
+  Scene s;
+  s.cloth.particles = {33, 33};
+  s.cloth.tile = 8;
+  s.cloth.height = 0.401;
+  s.solver.method = SolverMethod::Newton;
+  s.solver.preconditioner = Preconditioner::Multigrid;
+  const Fabric f = test_fabric();
+  RankRun divided(s, f);
+  s.solver.multigrid_divided = false;
+  RankRun whole(s, f);
+  Timers tm;
+  for (int k = 0; k < 6; ++k) {
+    divided.loop->step(tm);
+    whole.loop->step(tm);
+  }
+  const NewtonSolver& nw = whole.loop->newton();
+  const NewtonSolver& nd = divided.loop->newton();
+  ASSERT_GT(nw.multigrid_stats().size(), 1u);
+  ASSERT_GT(nw.multigrid_stats()[0].cycles, 0);
+  EXPECT_EQ(nw.multigrid_cycle_bytes(), 24 * nw.multigrid_stats()[0].points);
+  EXPECT_EQ(nw.multigrid_exchanged_bytes(), 0);
+  EXPECT_GT(nd.multigrid_exchanged_bytes(), 0);
+  EXPECT_EQ(nw.multigrid_stats()[0].cycles, nd.multigrid_stats()[0].cycles);
+  int64_t differ = 0;
+  for (int64_t p : divided.lists.particles.items)
+    for (int k = 0; k < 3; ++k) differ += divided.cloth.z[3 * p + k] != whole.cloth.z[3 * p + k];
+  EXPECT_GT(divided.lists.particles.size(), 0);
+  EXPECT_EQ(differ, 0) << "own particles differ between the divided and the whole cycle";
 }
 
 }  // namespace

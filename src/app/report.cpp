@@ -184,6 +184,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("per_cycle_bytes", (long long)mg.cycle)
       .value("builds_bytes", (long long)mg.builds)
       .value("cycles_bytes", (long long)mg.cycles)
+      .value("cycles_cpu_seconds_largest_rank", mg.cpu_max)
+      .value("cycles_cpu_seconds_all_ranks", mg.cpu_sum)
       .end_object();
   j.value("simulated_seconds", cloth.time);
   j.value("iterations_per_simulated_second", cloth.time > 0 ? n.iterations / cloth.time : 0.0);

@@ -84,6 +84,7 @@ struct Summary {
   // over this process's builds and V-cycles; the builds (either way).
   struct Gathered {
     int64_t build = 0, cycle = 0, builds = 0, cycles = 0, build_count = 0;
+    double cpu_max = 0, cpu_sum = 0;  // CPU seconds in the V-cycles: the largest rank's, all ranks together
   } multigrid_gathered;
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)

@@ -1,7 +1,9 @@
 #include "decomp/reduction.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 namespace drape {
@@ -90,6 +92,35 @@ void MpiReducer::gather_bytes(const void* mine, const std::vector<int64_t>& byte
     for (int k = 0; k < n; ++k)
       if (cnt[k] > 0) std::memcpy(static_cast<char*>(all) + at[k] + from, round_.data() + disp[k], size_t(cnt[k]));
   }
+  seconds += MPI_Wtime() - t0;
+}
+
+int MpiReducer::rank() const {
+  int me = 0;
+  MPI_Comm_rank(comm_, &me);
+  return me;
+}
+
+void MpiReducer::exchange_bytes(const void* send, const std::vector<int64_t>& send_bytes, void* recv,
+                                const std::vector<int64_t>& recv_bytes) const {
+  const double t0 = MPI_Wtime();
+  const int n = int(send_bytes.size());
+  cnt_.resize(size_t(n));
+  disp_.resize(size_t(n));
+  rcnt_.resize(size_t(n));
+  rdisp_.resize(size_t(n));
+  int64_t s = 0, r = 0;
+  for (int k = 0; k < n; ++k) {
+    if (s + send_bytes[k] > INT32_MAX || r + recv_bytes[k] > INT32_MAX)
+      throw std::runtime_error("MpiReducer::exchange_bytes: over 2 GiB in one exchange");
+    cnt_[k] = int(send_bytes[k]);
+    disp_[k] = int(s);
+    rcnt_[k] = int(recv_bytes[k]);
+    rdisp_[k] = int(r);
+    s += send_bytes[k];
+    r += recv_bytes[k];
+  }
+  MPI_Alltoallv(send, cnt_.data(), disp_.data(), MPI_BYTE, recv, rcnt_.data(), rdisp_.data(), MPI_BYTE, comm_);
   seconds += MPI_Wtime() - t0;
 }
 

@@ -22,8 +22,12 @@ class MpiReducer : public Reducer {
   void counts(int64_t n, std::vector<int64_t>& out) const override;
   // In rounds of at most kPiece bytes a rank (MPI's counts are int).
   void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const override;
+  int rank() const override;
+  // One MPI_Alltoallv (the parts are small: a level's rows next to a rank's).
+  void exchange_bytes(const void* send, const std::vector<int64_t>& send_bytes, void* recv,
+                      const std::vector<int64_t>& recv_bytes) const override;
 
-  mutable double seconds = 0;  // in sum_tiles, max and max_each, this rank
+  mutable double seconds = 0;  // in its collectives but the integer sums and counts, this rank
 
  private:
   MPI_Comm comm_;
@@ -32,7 +36,7 @@ class MpiReducer : public Reducer {
   static constexpr int64_t kPiece = int64_t(1) << 26;
   mutable std::vector<char> round_;  // one round's pieces, rank after rank
   mutable std::vector<int64_t> at_;
-  mutable std::vector<int> cnt_, disp_;
+  mutable std::vector<int> cnt_, disp_, rcnt_, rdisp_;
 };
 
 }  // namespace drape

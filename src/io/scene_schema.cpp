@@ -102,8 +102,8 @@ void declare_solver(ParameterList& list) {
            "newton's linear CG: jacobi | multigrid | auto",
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
            "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; "
-           "on several ranks the levels are built from all ranks' rows and run on every rank alike, bitwise one rank's "
-           "result, self-contact's blocks across ranks included; not with AMRC on several ranks) ([design.md §7](design.md)); `auto`: "
+           "on several ranks the levels are built from all ranks' rows on every rank alike, the finest level's "
+           "sweeps run on each rank's own rows and the coarser levels on every rank, bitwise one rank's result, self-contact's blocks across ranks included; not with AMRC on several ranks) ([design.md §7](design.md)); `auto`: "
            "each mesh (grid sequencing's stages) takes the multigrid from `multigrid_particles` active particles on, "
            "Jacobi below it and with AMRC (which the multigrid does not run with on several ranks: `auto` chooses alike on any number of ranks)")
           .example("multigrid")
@@ -127,6 +127,13 @@ void declare_solver(ParameterList& list) {
            "iterations and shrinks (×0.7) above 1.5 times it, after a retry, or past max_iterations/2 linear "
            "iterations ([design.md §6](design.md#6-solvers-the-cost-is-stiff)); with `jacobi` the linear "
            "iterations choose dt").example("8")
+      .add("multigrid_divided", &SolverSpec::multigrid_divided, "", any(),
+           "multigrid, several ranks: the finest level on each rank's rows",
+           "with the multigrid on several ranks, each rank runs the V-cycle's finest level (its sweeps, residual "
+           "and restriction) on its own rows of K, exchanging the few entries of other ranks' rows they read, and "
+           "gathers level 1's right-hand side only; false: every rank gathers the whole right-hand side and runs "
+           "the whole cycle (the reference: the same result bit for bit, more work a rank) "
+           "([design.md §7](design.md))").example("false")
       .add("slope_line_search", &SolverSpec::slope_line_search, "", any(),
            "newton: line search on the energy slope (else backtracking)",
            "Newton's line search: regula falsi on the slope of the step's energy along the direction, "

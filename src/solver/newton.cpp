@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <stdexcept>
 
 #include "solver/multigrid/block_matrix.hpp"
@@ -43,6 +44,8 @@ void NewtonSolver::memory(MemoryTable& t) const {
   t.add(o, "gathered K, right-hand side and result (multigrid, several ranks)",
         kg_.start.capacity() * sizeof(int64_t) + kg_.col.capacity() * sizeof(int32_t) +
             (kg_.val.capacity() + rg_.capacity() + xg_.capacity()) * sizeof(double) + ranks_.memory());
+  t.add(o, "the finest level divided: ghosts, columns, messages, own and level-1 vectors (several ranks)",
+        div_.memory());
 }
 
 // The compact vectors' row r and the evaluator's own numbering's index r
@@ -75,7 +78,8 @@ uint64_t pattern_stamp(const Evaluator& ev) {
 // assembled rows' order, checked when the lists change.
 // On several ranks every rank assembles its rows with global columns, and
 // the levels are built from all of them, gathered in one rank's order, on
-// every rank alike (RankRows): the one-rank V-cycle, replicated.
+// every rank alike (RankRows); the V-cycle's finest level then runs on each
+// rank's own rows (DividedLevel), planned when the levels are rebuilt.
 void NewtonSolver::setup_multigrid(Evaluator& ev) {
   const ActiveLists& lists = ev.lists();
   const Reducer& red = dots_.reducer();
@@ -100,11 +104,37 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
   ranks_.gather_matrix(red, k_, kg_);
   mg_builds_bytes_ += ranks_.matrix_bytes();
   mg_.setup(kg_, ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
+  if (divided_on_ && mg_.finest_by_points() && (renumber || !div_.planned(mg_))) div_.plan(red, ranks_, k_, kg_, mg_);
 }
 
+// The finest level divided over the ranks (DividedLevel), where it is
+// smoothed by points; else the whole cycle gathered.
+bool NewtonSolver::divided() const {
+  return divided_on_ && dots_.reducer().ranks() > 1 && mg_.finest_by_points() && div_.planned(mg_);
+}
+
+namespace {
+double process_cpu() {
+  timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+}  // namespace
+
 void NewtonSolver::precondition(const double* r, double* s) {
+  const double c0 = process_cpu();
+  apply_preconditioner(r, s);
+  pc_cpu_ += process_cpu() - c0;
+}
+
+void NewtonSolver::apply_preconditioner(const double* r, double* s) {
   if (dots_.reducer().ranks() == 1) {
     mg_.apply(r, s);
+    return;
+  }
+  if (divided()) {
+    div_.apply(dots_.reducer(), k_, kg_, mg_, r, s);
+    mg_cycles_bytes_ += div_.gathered_bytes();
     return;
   }
   ranks_.gather(dots_.reducer(), r, rg_.data());

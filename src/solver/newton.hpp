@@ -14,6 +14,7 @@
 
 #include "solver/cg.hpp"
 #include "solver/memory_table.hpp"
+#include "solver/multigrid/divided_level.hpp"
 #include "solver/multigrid/multigrid.hpp"
 #include "solver/multigrid/rank_rows.hpp"
 #include "solver/scene.hpp"
@@ -31,7 +32,18 @@ class NewtonSolver {
 
   // Several ranks' V-cycle: bytes gathered into each rank per cycle and per
   // (the last) build, and over this process's builds and cycles so far (0 on one rank).
-  int64_t multigrid_cycle_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.vector_bytes() : 0; }
+  int64_t multigrid_cycle_bytes() const {
+    if (dots_.reducer().ranks() == 1) return 0;
+    return divided() ? div_.gathered_bytes() : ranks_.vector_bytes();
+  }
+  // The divided finest level's exchanges: bytes received so far, and its ghosts.
+  int64_t multigrid_exchanged_bytes() const { return div_.exchanged_bytes(); }
+  int64_t multigrid_ghosts() const { return div_.ghosts(); }
+  // Several ranks: the finest level divided (the default) or the whole cycle
+  // gathered (the reference); before the first solve.
+  void set_divided(bool on) { divided_on_ = on; }
+  // This process's CPU seconds in the V-cycles so far (all its threads).
+  double precondition_cpu_seconds() const { return pc_cpu_; }
   int64_t multigrid_build_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.matrix_bytes() : 0; }
   int64_t multigrid_builds_bytes() const { return mg_builds_bytes_; }
   int64_t multigrid_cycles_bytes() const { return mg_cycles_bytes_; }
@@ -79,8 +91,11 @@ class NewtonSolver {
   double through_kinks(Evaluator& ev, double* z, double g0, Trial&& trial, double& last_a, CgResult& res,
                        const CgSettings& st, double eta, Timers& tm);
   bool multigrid_stale(const Evaluator& ev) const;
-  // s = M^-1 r (compact vectors): on several ranks through the gathered levels.
+  // s = M^-1 r (compact vectors): on several ranks with the finest level
+  // divided where it can be (divided()), else through the gathered levels.
   void precondition(const double* r, double* s);
+  void apply_preconditioner(const double* r, double* s);
+  bool divided() const;
 
   const Cloth& c_;
   Minimizer& dots_;
@@ -105,10 +120,13 @@ class NewtonSolver {
   RankRows ranks_;
   BlockMatrix kg_;
   std::vector<double> rg_, xg_;
+  DividedLevel div_;
+  bool divided_on_ = true;
   // Solves on the current build, and the first's and last's iterations.
   int mg_solves_ = 0, mg_first_ = 0, mg_last_ = 0;
   int64_t mg_builds_ = 0;  // hierarchies built so far
   int64_t mg_builds_bytes_ = 0, mg_cycles_bytes_ = 0;  // gathered into this rank so far (several ranks)
+  double pc_cpu_ = 0;
 };
 
 }  // namespace drape

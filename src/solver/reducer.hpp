@@ -32,6 +32,14 @@ class Reducer {
   // into `all` (their sum), on every rank: for what each rank holds a part
   // of and every rank needs whole, in one order (the multigrid's levels).
   virtual void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const = 0;
+  // This rank's number (0 to ranks() - 1).
+  virtual int rank() const = 0;
+  // Each rank sends send_bytes[k] bytes to rank k, taken in rank order
+  // from `send`, and receives recv_bytes[k] from rank k into `recv`, in
+  // rank order: the values of a few rows that other ranks' rows read (the
+  // multigrid's finest level divided, DividedLevel). Collective.
+  virtual void exchange_bytes(const void* send, const std::vector<int64_t>& send_bytes, void* recv,
+                              const std::vector<int64_t>& recv_bytes) const = 0;
 };
 
 // gather_bytes for arrays of T: counts[k] values from rank k.
@@ -63,6 +71,11 @@ class LocalReducer : public Reducer {
   void counts(int64_t n, std::vector<int64_t>& out) const override { out.assign(1, n); }
   void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const override {
     if (all != mine && bytes[0] > 0) std::memcpy(all, mine, size_t(bytes[0]));
+  }
+  int rank() const override { return 0; }
+  void exchange_bytes(const void* send, const std::vector<int64_t>& send_bytes, void* recv,
+                      const std::vector<int64_t>&) const override {
+    if (recv != send && send_bytes[0] > 0) std::memcpy(recv, send, size_t(send_bytes[0]));
   }
 };
 

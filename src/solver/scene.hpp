@@ -74,6 +74,7 @@ struct SolverSpec {
   double multigrid_dt_max = 0.05;   // s, auto: dt_max on the multigrid's meshes (its dt follows Newton's count)
   int multigrid_max_iterations = 1000;  // auto: max_iterations on the multigrid's meshes
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
+  bool multigrid_divided = true;  // several ranks: the V-cycle's finest level on each rank's rows (else gathered whole)
   bool slope_line_search = true;  // Newton's line search on the energy slope (else backtracking on the cost)
   bool adaptive_forcing = false;  // Newton: linear tolerance from the residual's last reduction (Eisenstat-Walker)
   bool band_active_set = false;  // Newton: re-solve a step with the tangent of the band branches it lands on

@@ -20,6 +20,7 @@ TimeLoop::TimeLoop(Cloth& cloth, Model& model, const ActiveLists& lists, const T
   fit_saved(true);
   if (spec.method == SolverMethod::Newton && spec.band_active_set) ev_.track_branches(true);
   if (spec.method != SolverMethod::Newton) ev_.hold_stiffness(false);  // the nonlinear CG reads none of K
+  newton_.set_divided(spec.multigrid_divided);
   free_ = red.sum_i64(lists.particles.size());
 }
 

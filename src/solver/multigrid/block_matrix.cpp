@@ -6,21 +6,9 @@
 namespace drape {
 
 namespace {
-// Row r of A x, its blocks in column order (the same sum on any thread).
 inline void row_product(const BlockMatrix& A, int64_t r, const double* __restrict x, double* __restrict out) {
-  double y0 = 0, y1 = 0, y2 = 0;
-  const double* __restrict b = A.val.data() + 9 * A.start[r];
-  const int32_t* __restrict c = A.col.data();
-  for (int64_t k = A.start[r], e = A.start[r + 1]; k < e; ++k, b += 9) {
-    const double* xc = x + 3 * int64_t(c[k]);
-    const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
-    y0 += b[0] * x0 + b[1] * x1 + b[2] * x2;
-    y1 += b[3] * x0 + b[4] * x1 + b[5] * x2;
-    y2 += b[6] * x0 + b[7] * x1 + b[8] * x2;
-  }
-  out[0] = y0;
-  out[1] = y1;
-  out[2] = y2;
+  const int64_t b = A.start[r];
+  row_times(A.val.data() + 9 * b, A.col.data() + b, A.start[r + 1] - b, x, out);
 }
 }  // namespace
 

@@ -93,6 +93,26 @@ struct SlotMaps {
   }
 };
 
+// One block row times x: `count` blocks `val` (9 each) in columns `col`,
+// summed in their order into out (3 values). BlockMatrix's products and a
+// rank's rows with their own column numbers (DividedLevel) share it: the
+// same sums, bit for bit.
+inline void row_times(const double* __restrict val, const int32_t* __restrict col, int64_t count,
+                      const double* __restrict x, double* __restrict out) {
+  double y0 = 0, y1 = 0, y2 = 0;
+  const double* __restrict b = val;
+  for (int64_t k = 0; k < count; ++k, b += 9) {
+    const double* xc = x + 3 * int64_t(col[k]);
+    const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
+    y0 += b[0] * x0 + b[1] * x1 + b[2] * x2;
+    y1 += b[3] * x0 + b[4] * x1 + b[5] * x2;
+    y2 += b[6] * x0 + b[7] * x1 + b[8] * x2;
+  }
+  out[0] = y0;
+  out[1] = y1;
+  out[2] = y2;
+}
+
 // y += s * B x for one 3 x 3 block.
 inline void add_block_times(const double* b, const double* x, double s, double* y) {
   for (int i = 0; i < 3; ++i) y[i] += s * (b[3 * i] * x[0] + b[3 * i + 1] * x[1] + b[3 * i + 2] * x[2]);

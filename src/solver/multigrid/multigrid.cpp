@@ -8,6 +8,7 @@
 namespace drape {
 
 void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
+  ++levels_built_;
   levels_.clear();
   levels_.emplace_back();
   levels_[0].ids = ids;
@@ -63,7 +64,6 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
   const bool fresh = relevel || stamp != stamp_ || stamp == 0 || A0.rows != rows_;
   if (relevel) build_levels(ids, ni, nj);
   else if (fresh) forget();  // a new pattern's smoothers start cold, as new levels' do
-  levels_built_ = true;
   ni_ = ni;
   nj_ = nj;
   stamp_ = stamp;

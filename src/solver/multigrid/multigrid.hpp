@@ -93,6 +93,23 @@ class Multigrid {
   const std::vector<MultigridLevelStats>& stats() const { return stats_; }
   const BlockMatrix& matrix(int l) const { return l == 0 ? *a0_ : levels_[l].A; }
 
+  // What a finest level divided over ranks (DividedLevel) reads: whether
+  // the finest level is smoothed by points with a level below it (else it
+  // cannot be divided), its smoother and transfer, level l's particles;
+  // the cycle from level 1 down (b1, x1: 3 a level-1 row), and the finest
+  // level's part of a cycle counted (its seconds there). levels_built()
+  // changes whenever the levels' points and patterns are rebuilt.
+  bool finest_by_points() const { return levels() > 1 && !levels_[0].lines; }
+  const Chebyshev& finest_smoother() const { return levels_[0].smoother; }
+  const Prolongation& finest_transfer() const { return levels_[0].transfer(); }
+  const std::vector<int64_t>& level_ids(int l) const { return levels_[size_t(l)].ids; }
+  void cycle_below(const double* b1, double* x1) { cycle(1, b1, x1); }
+  void count_finest(double seconds) {
+    ++stats_[0].cycles;
+    stats_[0].seconds += seconds;
+  }
+  uint64_t levels_built() const { return levels_built_; }
+
  private:
   struct Level {
     std::vector<int64_t> ids;  // grid particles, in the finest level's order
@@ -124,7 +141,7 @@ class Multigrid {
   CoarseSolve coarse_;
   std::unique_ptr<Multigrid> probe_;  // fit_cycles: the bilinear cycle that relaxes the test vectors
   uint64_t stamp_ = 0;
-  bool levels_built_ = false;
+  uint64_t levels_built_ = 0;
   int ni_ = 0, nj_ = 0;
   int64_t rows_ = -1;
 };

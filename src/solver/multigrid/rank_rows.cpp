@@ -8,7 +8,11 @@ namespace drape {
 void RankRows::number(const Reducer& red, const Tiling& tiling, const std::vector<int64_t>& mine, int64_t grid) {
   red.counts(int64_t(mine.size()), rows_);
   int64_t n = 0;
-  for (int64_t c : rows_) n += c;
+  first_.clear();
+  for (int64_t c : rows_) {
+    first_.push_back(n);
+    n += c;
+  }
   std::vector<int64_t> cat(static_cast<size_t>(n));
   gather_all(red, mine.data(), rows_, cat.data(), bytes_);
   // One rank's list order: by tile, then by index.
@@ -78,7 +82,7 @@ void RankRows::take_mine(const double* all, double* mine) const {
 }
 
 size_t RankRows::memory() const {
-  return (ids_.capacity() + rows_.capacity() + from_.capacity() + mine_.capacity() + cat_start_.capacity()) * 8 +
+  return (ids_.capacity() + rows_.capacity() + from_.capacity() + first_.capacity() + mine_.capacity() + cat_start_.capacity()) * 8 +
          column_of_.capacity() * 4 + cat_.capacity() * 8;
 }
 

@@ -6,6 +6,7 @@
 // result). The product's vectors stay split; each V-cycle gathers its
 // right-hand side (3 doubles a free particle) and each rank takes its own
 // rows of the result.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +30,12 @@ class RankRows {
   void gather_matrix(const Reducer& red, const BlockMatrix& mine, BlockMatrix& all);
   // Every rank's 3 doubles a row of `mine` into `all`, in global order. Collective.
   void gather(const Reducer& red, const double* mine, double* all);
+  // This rank's row r's global row.
+  const std::vector<int64_t>& mine() const { return mine_; }
+  // The rank whose row global row g is.
+  int owner(int64_t g) const {
+    return int(std::upper_bound(first_.begin(), first_.end(), from_[size_t(g)]) - first_.begin()) - 1;
+  }
   // This rank's rows of a global vector.
   void take_mine(const double* all, double* mine) const;
   // Bytes this rank received in the last gather_matrix, and a gather's.
@@ -39,6 +46,7 @@ class RankRows {
  private:
   std::vector<int64_t> ids_, rows_;  // rows_: rows per rank
   std::vector<int64_t> from_;        // global row -> its row in the ranks' concatenation
+  std::vector<int64_t> first_;       // per rank: its first row in the concatenation
   std::vector<int64_t> mine_;        // this rank's row -> global row
   std::vector<int32_t> column_of_;
   std::vector<int64_t> blocks_, bytes_, len_, cat_start_;

@@ -14,16 +14,6 @@ double norm2(const std::vector<double>& v) {
 }
 }  // namespace
 
-void Chebyshev::apply_dinv(const double* r, double* out) const {
-  const int64_t n = int64_t(dinv_.size() / 9);
-#pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < n; ++i) {
-    const double* m = &dinv_[9 * i];
-    const double* x = r + 3 * i;
-    for (int k = 0; k < 3; ++k) out[3 * i + k] = m[3 * k] * x[0] + m[3 * k + 1] * x[1] + m[3 * k + 2] * x[2];
-  }
-}
-
 void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
   degree_ = degree;
   const int64_t n = A.rows;
@@ -55,7 +45,7 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
     if (!(nd > 0)) break;
     for (double& x : eig_) x /= nd;
     A.multiply(eig_.data(), r_.data());
-    apply_dinv(r_.data(), eig_.data());
+    apply_dinv(n, [&](int64_t i) { return &dinv_[9 * i]; }, r_.data(), eig_.data());
     lam = std::sqrt(norm2(eig_));
   }
   estimate_ = lam;
@@ -74,32 +64,10 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
   lmin_ = lmax_ / ratio;
 }
 
-// Chebyshev acceleration of x += D^-1 (b - A x) (Saad, Iterative Methods
-// for Sparse Linear Systems, 2nd ed., Algorithm 12.1, preconditioned).
 void Chebyshev::smooth(const BlockMatrix& A, const double* b, double* x, bool zero) {
-  const int64_t m = 3 * A.rows;
-  const double theta = 0.5 * (lmax_ + lmin_), delta = 0.5 * (lmax_ - lmin_);
-  const double sigma = theta / delta;
-  double rho = 1 / sigma;
-  if (zero)
-    for (int64_t i = 0; i < m; ++i) r_[i] = b[i];
-  else
-    A.residual(b, x, r_.data());
-  apply_dinv(r_.data(), d_.data());
-  for (int64_t i = 0; i < m; ++i) d_[i] /= theta;
-  for (int k = 0; k < degree_; ++k) {
-    if (zero && k == 0)
-      for (int64_t i = 0; i < m; ++i) x[i] = d_[i];
-    else
-      for (int64_t i = 0; i < m; ++i) x[i] += d_[i];
-    if (k + 1 == degree_) break;
-    A.residual(b, x, r_.data());
-    const double rho1 = 1 / (2 * sigma - rho);
-    const double c1 = rho1 * rho, c2 = 2 * rho1 / delta;
-    apply_dinv(r_.data(), z_.data());
-    for (int64_t i = 0; i < m; ++i) d_[i] = c1 * d_[i] + c2 * z_[i];
-    rho = rho1;
-  }
+  smooth_rows(
+      A.rows, b, x, zero, [&](const double* y, double* r) { A.residual(b, y, r); },
+      [&](int64_t i) { return &dinv_[9 * i]; }, r_.data(), d_.data(), z_.data());
 }
 
 }  // namespace drape

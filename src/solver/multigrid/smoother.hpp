@@ -19,7 +19,15 @@ class Chebyshev {
   void setup(const BlockMatrix& A, int degree, double ratio);
   // x improved towards A x = b (x = 0 on entry when `zero`).
   void smooth(const BlockMatrix& A, const double* b, double* x, bool zero);
+  // The same polynomial on `rows` rows of A whose products another holds
+  // (a rank's rows: DividedLevel): residual(x, r) sets r = b - A x there,
+  // dinv(i) is row i's inverse diagonal block; r, d, z: 3 doubles a row.
+  // The same operations in the same order as smooth.
+  template <class Residual, class Dinv>
+  void smooth_rows(int64_t rows, const double* b, double* x, bool zero, Residual&& residual, Dinv&& dinv, double* r,
+                   double* d, double* z) const;
   double lambda_max() const { return lmax_; }
+  int degree() const { return degree_; }
   // The power iteration's estimate of D^-1 A's spectral radius, and D^-1
   // (9 a row): the smoothed prolongation's step.
   double estimate() const { return estimate_; }
@@ -28,10 +36,51 @@ class Chebyshev {
   void forget() { eig_.clear(); }
 
  private:
-  void apply_dinv(const double* r, double* out) const;
+  template <class Dinv>
+  static void apply_dinv(int64_t rows, Dinv&& dinv, const double* r, double* out);
   std::vector<double> dinv_, r_, d_, z_, eig_;  // eig_: the power iteration's vector
   double lmax_ = 1, lmin_ = 0.1, estimate_ = 1;
   int degree_ = 2;
 };
+
+template <class Dinv>
+void Chebyshev::apply_dinv(int64_t rows, Dinv&& dinv, const double* r, double* out) {
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < rows; ++i) {
+    const double* m = dinv(i);
+    const double* x = r + 3 * i;
+    for (int k = 0; k < 3; ++k) out[3 * i + k] = m[3 * k] * x[0] + m[3 * k + 1] * x[1] + m[3 * k + 2] * x[2];
+  }
+}
+
+// Chebyshev acceleration of x += D^-1 (b - A x) (Saad, Iterative Methods
+// for Sparse Linear Systems, 2nd ed., Algorithm 12.1, preconditioned).
+template <class Residual, class Dinv>
+void Chebyshev::smooth_rows(int64_t rows, const double* b, double* x, bool zero, Residual&& residual, Dinv&& dinv,
+                            double* r, double* d, double* z) const {
+  const int64_t m = 3 * rows;
+  const double theta = 0.5 * (lmax_ + lmin_), delta = 0.5 * (lmax_ - lmin_);
+  const double sigma = theta / delta;
+  double rho = 1 / sigma;
+  if (zero)
+    for (int64_t i = 0; i < m; ++i) r[i] = b[i];
+  else
+    residual(x, r);
+  apply_dinv(rows, dinv, r, d);
+  for (int64_t i = 0; i < m; ++i) d[i] /= theta;
+  for (int k = 0; k < degree_; ++k) {
+    if (zero && k == 0)
+      for (int64_t i = 0; i < m; ++i) x[i] = d[i];
+    else
+      for (int64_t i = 0; i < m; ++i) x[i] += d[i];
+    if (k + 1 == degree_) break;
+    residual(x, r);
+    const double rho1 = 1 / (2 * sigma - rho);
+    const double c1 = rho1 * rho, c2 = 2 * rho1 / delta;
+    apply_dinv(rows, dinv, r, z);
+    for (int64_t i = 0; i < m; ++i) d[i] = c1 * d[i] + c2 * z[i];
+    rho = rho1;
+  }
+}
 
 }  // namespace drape
