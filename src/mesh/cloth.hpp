@@ -6,8 +6,10 @@
 //   shear  slot p   : the cell (a leaf of the active mesh) whose lower corner is p
 // AMRC switches slots on and off; nothing is reallocated during a run.
 //
-// The unknowns live in one vector z = [x (3N) | tension (2N) | moment (2N) |
-// shear (N)] so the minimizer works on a single array.
+// The unknowns live in one vector z = [x (3N) | tension (2M) | moment (2M) |
+// shear (M)] so the minimizer works on a single array: positions at grid
+// ids, element forces at their first particle's slot (Cloth::slot; M = N
+// on one rank, the rank's tiles' and ghosts' particles on several).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -52,14 +54,20 @@ struct alignas(64) GatherRow {
   int32_t at[16];
 };
 
-// Offsets of the unknown blocks in z.
+// Offsets of the unknown blocks in z: n grid particles' positions, then
+// the forces of m slots' elements (2 edges, 2 triples and a cell a slot).
 struct Layout {
-  int64_t n = 0;
+  int64_t n = 0, m = 0;
   int64_t x() const { return 0; }
   int64_t tension() const { return 3 * n; }
-  int64_t moment() const { return 5 * n; }
-  int64_t shear() const { return 7 * n; }
-  int64_t size() const { return 8 * n; }
+  int64_t moment() const { return 3 * n + 2 * m; }
+  int64_t shear() const { return 3 * n + 4 * m; }
+  int64_t size() const { return 3 * n + 5 * m; }
+  // Where force block b (0 tension, 1 moment, 2 shear) starts.
+  int64_t block(int b) const { return b == 0 ? tension() : b == 1 ? moment() : shear(); }
+  // z's index of the force of element slot s (2p+d, or p for a cell) of
+  // block b, its particle p at slot q.
+  int64_t force(int b, int64_t s, int64_t q) const { return b < 2 ? block(b) + 2 * q + (s & 1) : block(b) + q; }
 };
 
 struct Cloth {
@@ -68,10 +76,12 @@ struct Cloth {
   std::vector<double> z;         // unknowns (see Layout)
   // Positions at the start of this step and the one before, 3 values for
   // each particle this rank holds (its tiles' and its ghosts'), at slot(p):
-  // on several ranks not sized by the grid (hold_history).
+  // on several ranks not sized by the grid (hold_particles), nor are z's
+  // force blocks.
   std::vector<double> x1, x2;
-  // Each particle's slot in x1, x2 (-1: not held here); empty: every
-  // particle, at its grid id. `held_version` changes with it.
+  // Each particle's slot in x1, x2 and z's force blocks (-1: not held
+  // here); empty: every particle, at its grid id. `held_version` changes
+  // with it.
   std::vector<int32_t> slot_of;
   uint64_t held_version = 0;
   std::vector<double> mass;      // kg per particle: density * area it represents
@@ -108,6 +118,11 @@ struct Cloth {
   const double* x1_at(int64_t p) const { return &x1[size_t(3 * slot(p))]; }
   double* x2_at(int64_t p) { return &x2[size_t(3 * slot(p))]; }
   const double* x2_at(int64_t p) const { return &x2[size_t(3 * slot(p))]; }
+  // z's index of element slot s's force in block b (0 tension, 1 moment,
+  // 2 shear: Layout::force); its particle must be held.
+  int64_t force_index(int b, int64_t s) const { return layout.force(b, s, slot(b < 2 ? s >> 1 : s)); }
+  double& force(int b, int64_t s) { return z[size_t(force_index(b, s))]; }
+  double force(int b, int64_t s) const { return z[size_t(force_index(b, s))]; }
 
   bool active(int64_t p) const { return flags[p] & kActive; }
   bool free(int64_t p) const { return (flags[p] & (kActive | kFixed | kHanging)) == kActive; }
@@ -123,10 +138,10 @@ inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
 // Particle p's index in an array held in slots (Cloth::slots; null: p).
 inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(slot[p]) : p; }
 
-// x1, x2 for the particles `held` (ascending grid ids) only, in that order:
-// values of particles held before carried over, the others 0.
-void hold_history(Cloth& c, const std::vector<int64_t>& held);
-// The particles c holds x1, x2 for, ascending.
+// x1, x2 and z's forces for the particles `held` (ascending grid ids) only,
+// in that order: values of particles held before carried over, the others 0.
+void hold_particles(Cloth& c, const std::vector<int64_t>& held);
+// The particles c holds x1, x2 and forces for, ascending.
 std::vector<int64_t> held_particles(const Cloth& c);
 
 }  // namespace drape

@@ -365,8 +365,7 @@ class Evaluator {
   // 2 cell), slot s, keeps its force's entry in the gradient or diagonal;
   // null for the ring's in the compact order (other ranks' unknowns).
   double* force_entry(double* out, int kind, int64_t s, int64_t pos) const {
-    const int64_t block[3] = {c_.layout.tension(), c_.layout.moment(), c_.layout.shear()};
-    if (!compact_) return out + block[kind] + s;
+    if (!compact_) return out + c_.force_index(kind, s);
     const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
     return pos < own[kind]->size() ? out + compact_block(kind + 1) + pos : nullptr;
   }
