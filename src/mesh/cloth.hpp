@@ -92,9 +92,11 @@ struct Cloth {
   std::vector<int32_t> next[2], prev[2];
   // Element slot switches (1 = active element).
   std::vector<uint8_t> edge_on, triple_on, shear_on;
-  // Shear cells: cell[k][s] is corner k+1 of slot s's cell (k = 0: along i
-  // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k][p]
-  // is the slot whose corner k+1 p is (at most one: the leaves tile the cloth).
+  // Shear cells: cell[k] holds corner k+1 of slot s's cell (k = 0: along i
+  // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k]
+  // the slot whose corner k+1 p is (at most one: the leaves tile the
+  // cloth). Held in slots like x1 (several ranks: the rank's tiles' and
+  // ghosts' particles): read through cell_at and corner_at.
   std::vector<int32_t> cell[3], corner_of[3];
   // The elements' rest geometry is not held here: the evaluator keeps its
   // own elements' in list order (mesh/topology.hpp computes it).
@@ -118,6 +120,10 @@ struct Cloth {
   const double* x1_at(int64_t p) const { return &x1[size_t(3 * slot(p))]; }
   double* x2_at(int64_t p) { return &x2[size_t(3 * slot(p))]; }
   const double* x2_at(int64_t p) const { return &x2[size_t(3 * slot(p))]; }
+  // Corner k+1 of the cell at slot s (held); the cell p is corner k+1 of
+  // (-1: none, or p not held here).
+  int64_t cell_at(int k, int64_t s) const { return cell[k][size_t(slot(s))]; }
+  int64_t corner_at(int k, int64_t p) const { return holds(p) ? int64_t(corner_of[k][size_t(slot(p))]) : -1; }
   // z's index of element slot s's force in block b (0 tension, 1 moment,
   // 2 shear: Layout::force); its particle must be held.
   int64_t force_index(int b, int64_t s) const { return layout.force(b, s, slot(b < 2 ? s >> 1 : s)); }
@@ -132,14 +138,15 @@ struct Cloth {
 // A shear cell at slot s: ids = [s, along i, along j, across] (on slots only).
 inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
   ids[0] = s;
-  for (int k = 0; k < 3; ++k) ids[k + 1] = c.cell[k][s];
+  for (int k = 0; k < 3; ++k) ids[k + 1] = c.cell_at(k, s);
 }
 
 // Particle p's index in an array held in slots (Cloth::slots; null: p).
 inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(slot[p]) : p; }
 
-// x1, x2 and z's forces for the particles `held` (ascending grid ids) only,
-// in that order: values of particles held before carried over, the others 0.
+// x1, x2, z's forces and the cells' corners for the particles `held`
+// (ascending grid ids) only, in that order: values of particles held before
+// carried over, the others 0 (-1 for the corners: rebuild_topology then).
 void hold_particles(Cloth& c, const std::vector<int64_t>& held);
 // The particles c holds x1, x2 and forces for, ascending.
 std::vector<int64_t> held_particles(const Cloth& c);

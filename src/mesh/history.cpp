@@ -29,6 +29,16 @@ std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, con
   }
   return z;
 }
+// The cells' corner tables for the slots `slot`, carried from c's.
+void hold_cells(Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
+  for (std::vector<int32_t>* t : {c.cell, c.corner_of})
+    for (int k = 0; k < 3; ++k) {
+      std::vector<int32_t> out(held.size(), -1);
+      for (int64_t p : held)
+        if (c.holds(p)) out[size_t(slot[size_t(p)])] = t[k][size_t(c.slot(p))];
+      t[k].swap(out);
+    }
+}
 }  // namespace
 
 void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
@@ -46,6 +56,7 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
     }
   }
   std::vector<double> z = held_z(c, slot, held);
+  hold_cells(c, slot, held);
   c.slot_of.swap(slot);
   c.x1.swap(x1);
   c.x2.swap(x2);

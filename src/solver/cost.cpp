@@ -322,7 +322,7 @@ void Evaluator::build_rows() {
     nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
   });
   place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
-    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
+    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell_at(k, s));
   });
   const ActiveList& pl = lists_.particles;
   // Each thread walks the lists beside its run of the particle list.
