@@ -29,7 +29,7 @@ struct RankRun {
         tiling(cloth.grid.ni, cloth.grid.nj, s.cloth.tile),
         dec(decompose(cloth, tiling, MPI_COMM_WORLD, ghost_widths(false, 0))),
         policy{s.parallel.schedule, s.parallel.chunk} {
-    hold_own_history(cloth, tiling, dec);  // as the program does
+    hold_own_particles(cloth, tiling, dec);  // as the program does
     build_active_lists(cloth, tiling, dec.owned, lists, dec.halo->ring());
     loop = std::make_unique<TimeLoop>(cloth, model, lists, tiling, policy, *dec.reducer, s.solver, dec.ghosts());
   }
@@ -79,11 +79,13 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
   EXPECT_EQ(row_bytes(t, kGatheredLevel), 0u);
 }
 
-// The step history (x1, x2, 48 bytes a grid particle on one rank) holds
-// this rank's tiles and its ghosts: well under two thirds of the grid's on
-// one of two ranks. Only its slot map (4 bytes a particle) is the grid's.
-// After a few steps each own particle's history is one rank's, bit for bit.
-TEST(MemoryNp2, HistoryHoldsItsOwnTilesAndGhosts) {
+// The step history (x1, x2, 48 bytes a grid particle on one rank), z's
+// forces (40) and the cells' corners (24) hold this rank's tiles and its
+// ghosts: well under two thirds of the grid's on one of two ranks. Only
+// their slot map (4 bytes a particle) and z's positions (24) are the
+// grid's. After a few steps each own particle's history, forces and
+// cells are one rank's, bit for bit.
+TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
   Scene s;
   s.cloth.particles = {65, 65};
   s.cloth.tile = 8;
@@ -95,26 +97,40 @@ TEST(MemoryNp2, HistoryHoldsItsOwnTilesAndGhosts) {
   MemoryTable t;
   add_memory(t, c);
   const double history = double(row_bytes(t, "Cloth: x1, x2 (earlier positions)"));
-  std::printf("x1, x2: %.1f bytes a grid particle on this rank of two\n", history / n);
+  const double forces = double(row_bytes(t, "Cloth: z's forces"));
+  const double cells = double(row_bytes(t, "Cloth: cell, corner_of (shear cells' corners)"));
+  std::printf("x1, x2: %.1f, z's forces: %.1f, cells: %.1f bytes a grid particle on this rank of two\n", history / n,
+              forces / n, cells / n);
   EXPECT_LT(history, 0.65 * 48 * n) << "x1, x2 sized by the grid, not this rank's tiles and ghosts?";
-  EXPECT_EQ(row_bytes(t, "Cloth: x1, x2's slots (several ranks)"), size_t(4 * n));
+  EXPECT_LT(forces, 0.65 * 40 * n) << "z's forces sized by the grid, not this rank's tiles and ghosts?";
+  EXPECT_LT(cells, 0.65 * 24 * n) << "cells' corners sized by the grid, not this rank's tiles and ghosts?";
+  EXPECT_EQ(row_bytes(t, "Cloth: z's positions"), size_t(24 * n));
+  EXPECT_EQ(row_bytes(t, "Cloth: slots of x1, x2, the forces and cells (several ranks)"), size_t(4 * n));
   Timers tm;
   for (int k = 0; k < 3; ++k) {
     one.step();
     run.loop->step(tm);
   }
-  int64_t own = 0, differ = 0;
+  const Cloth& whole = one.cloth;
+  int64_t own = 0, differ = 0, forces_differ = 0, cells_differ = 0;
   for (int tile : run.dec.owned) {
     const TileRange r = run.tiling.range(tile);
     for (int i = r.i0; i < r.i1; ++i)
       for (int j = r.j0; j < r.j1; ++j, ++own) {
         const int64_t p = c.grid.id(i, j);
         for (int k = 0; k < 3; ++k)
-          differ += c.x1_at(p)[k] != one.cloth.x1[3 * p + k] || c.x2_at(p)[k] != one.cloth.x2[3 * p + k];
+          differ += c.x1_at(p)[k] != whole.x1[3 * p + k] || c.x2_at(p)[k] != whole.x2[3 * p + k];
+        for (int b = 0; b < 3; ++b)
+          for (int64_t e = b < 2 ? 2 * p : p; e < (b < 2 ? 2 * p + 2 : p + 1); ++e)
+            forces_differ += c.force(b, e) != whole.force(b, e);
+        for (int k = 0; k < 3; ++k)
+          cells_differ += c.cell_at(k, p) != whole.cell_at(k, p) || c.corner_at(k, p) != whole.corner_at(k, p);
       }
   }
   EXPECT_GT(own, 0);
   EXPECT_EQ(differ, 0) << "own particles' history differs from one rank's";
+  EXPECT_EQ(forces_differ, 0) << "own particles' element forces differ from one rank's";
+  EXPECT_EQ(cells_differ, 0) << "own particles' cells differ from one rank's";
 }
 
 // The multigrid on two ranks: each rank receives every rank's rows of K

@@ -194,9 +194,12 @@ void Amrc::set_uniform_level(Cloth& c, double density, bool shear, int level) {
 // leaves' over it: a split child keeps its parent's, a merged parent takes its
 // children's mean. Each old leaf lies in one new leaf, so writing a new
 // leaf's origin slot never changes what another new leaf reads.
+// On several ranks only the cells whose origin this rank holds, from the
+// old leaves it holds (as carry_position's history).
 void Amrc::carry_shear(Cloth& c) const {
-  double* f = c.shear();
   tree_.for_each_leaf([&](const Cell& l) {
+    const int64_t at = c.grid.id(l.i, l.j);
+    if (!c.holds(at)) return;
     const int ie = tree_.i_end(l), je = tree_.j_end(l);
     double sum = 0;
     int count = 0;
@@ -204,10 +207,11 @@ void Amrc::carry_shear(Cloth& c) const {
       for (int cj = l.j; cj < je; ++cj) {
         const Cell o = old_.leaf_at(ci, cj);
         const int64_t s = c.grid.id(o.i, o.j);
-        if (shear_on_[s]) sum += f[s];
-        count += shear_on_[s];
+        if (!shear_on_[s] || !c.holds(s)) continue;
+        sum += c.force(2, s);
+        ++count;
       }
-    f[c.grid.id(l.i, l.j)] = count > 0 ? sum / count : 0.0;
+    c.force(2, at) = count > 0 ? sum / count : 0.0;
   });
 }
 
@@ -249,24 +253,24 @@ void Amrc::carry_over(Cloth& c, double density, bool shear) {
   shear_on_ = c.shear_on;
   carry_shear(c);
   apply(c, density, shear);
-  const Layout& L = c.layout;
   for (int64_t p = 0; p < n; ++p) {
     if (was_active_[p] || !c.active(p)) continue;
     const Corners k = corners_of(old_, c.grid.i_of(p), c.grid.j_of(p));
     carry_position(c, k, p);
-    auto carry = [&](int64_t offset, int per, const std::vector<uint8_t>& on) {
-      for (int d = 0; d < per; ++d) {
+    if (!c.holds(p)) continue;  // its forces are its owner's to carry (held in slots)
+    auto carry = [&](int b, const std::vector<uint8_t>& on) {
+      for (int d = 0; d < 2; ++d) {
         double s = 0, w = 0;
         for (int q = 0; q < 4; ++q)
-          if (on[per * k.id[q] + d]) {
-            s += k.w[q] * c.z[offset + per * k.id[q] + d];
+          if (on[2 * k.id[q] + d] && c.holds(k.id[q])) {
+            s += k.w[q] * c.force(b, 2 * k.id[q] + d);
             w += k.w[q];
           }
-        c.z[offset + per * p + d] = w > 0 ? s / w : 0.0;
+        c.force(b, 2 * p + d) = w > 0 ? s / w : 0.0;
       }
     };
-    carry(L.tension(), 2, edge_on_);
-    carry(L.moment(), 2, triple_on_);
+    carry(0, edge_on_);
+    carry(1, triple_on_);
   }
 }
 

@@ -38,7 +38,7 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
     tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
     // refuses more ranks than tiles
     dec_ = decompose(cloth, tiling, comm_, ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0));
-    hold_own_history(cloth, tiling, dec_);
+    hold_own_particles(cloth, tiling, dec_);
   }
   make_output_dir();
   rebuild_lists();

@@ -10,6 +10,7 @@
 #include "app/simulation.hpp"
 #include "decomp/collective.hpp"
 #include "decomp/rebalance.hpp"
+#include "mesh/topology.hpp"
 
 namespace drape {
 
@@ -110,6 +111,8 @@ void Simulation::rebalance() {
   Rebalance rb;
   rb.step = cloth.step;
   if (!drape::rebalance(dec_, cloth, tiling, scene.parallel.imbalance, comm_, rb)) return;
+  // The cells' corners of the particles newly held (Cloth::cell) from the tree.
+  rebuild_topology(cloth, scene.cloth.shear, &amrc->tree());
   own_blocks();
   sum_.rebalances.push_back(rb);
   if (talk_)

@@ -32,6 +32,7 @@ FrameView frame_of(const Cloth& c, const std::vector<Block>& owned) {
   f.tension = c.tension();
   f.moment = c.moment();
   f.shear = c.shear();
+  f.slot = c.slots();
   f.flags = c.flags.data();
   f.level = c.level.data();
   f.owned = owned;

@@ -28,7 +28,7 @@ Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm,
   return d;
 }
 
-void hold_own_history(Cloth& c, const Tiling& tiling, const Decomposition& d) {
+void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d) {
   if (!d.halo) return;
   std::vector<int64_t> held = d.halo->ghost_ids();
   for (int t : d.owned) {
@@ -38,7 +38,7 @@ void hold_own_history(Cloth& c, const Tiling& tiling, const Decomposition& d) {
   }
   std::sort(held.begin(), held.end());
   held.erase(std::unique(held.begin(), held.end()), held.end());
-  hold_history(c, held);
+  hold_particles(c, held);
 }
 
 DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {

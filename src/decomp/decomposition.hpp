@@ -47,10 +47,10 @@ struct GhostWidths {
 };
 GhostWidths ghost_widths(bool amrc, int max_level);
 
-// On several ranks, c's step history (x1, x2) for this rank's tiles and its
-// ghosts only (hold_history), values carried where held before; one rank
+// On several ranks, c's step history (x1, x2) and element forces for this rank's tiles and its
+// ghosts only (hold_particles), values carried where held before; one rank
 // holds the grid's.
-void hold_own_history(Cloth& c, const Tiling& tiling, const Decomposition& d);
+void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d);
 
 // Collective. Throws InputError for more ranks than tiles.
 Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw = {});

@@ -69,9 +69,9 @@ std::vector<int64_t> HaloExchange::ghost_ids() const {
   return ids;
 }
 
-void HaloExchange::exchange(double* z, int blocks) const {
-  // Per particle: its 3 positions, then its 5 forces (z's blocks).
-  const Field all[4] = {{0, 3}, {3 * n_, 2}, {5 * n_, 2}, {7 * n_, 1}};
+void HaloExchange::exchange(double* z, int blocks, const Layout& L, const int32_t* slot) const {
+  // Per particle: its 3 positions, then its 5 forces (z's blocks, in slots).
+  const Field all[4] = {{0, 3}, {L.tension(), 2, slot}, {L.moment(), 2, slot}, {L.shear(), 1, slot}};
   const bool pos = blocks & kPositions, forces = blocks & kForces;
   // Contact ghosts are read for their positions only.
   run(z, pos ? all : all + 1, (pos ? 1 : 0) + (forces ? 3 : 0), pos ? all : nullptr);
@@ -136,12 +136,12 @@ void HaloExchange::run(double* z, const Field* fields, int nfields, const Field*
       [&](int i, size_t k, double* b) {
         for (int64_t p : (*plans[i])[k].send)
           for (int q = 0; q < nf[i]; ++q)
-            for (int c = 0; c < fs[i][q].per; ++c) *b++ = z[fs[i][q].offset + fs[i][q].per * p + c];
+            for (int c = 0; c < fs[i][q].per; ++c) *b++ = z[fs[i][q].at(p, c)];
       },
       [&](int i, size_t k, const double* b) {
         for (int64_t p : (*plans[i])[k].recv)
           for (int q = 0; q < nf[i]; ++q)
-            for (int c = 0; c < fs[i][q].per; ++c) z[fs[i][q].offset + fs[i][q].per * p + c] = *b++;
+            for (int c = 0; c < fs[i][q].per; ++c) z[fs[i][q].at(p, c)] = *b++;
       });
 }
 

@@ -34,7 +34,9 @@ class HaloExchange : public Halo {
   // A new plan for new tile owners (after a migration), same widths.
   void replan(const std::vector<int>& owner);
 
-  void exchange(double* z, int blocks) const override;
+  using Halo::exchange;
+  void exchange(double* z, int blocks, const Layout& layout, const int32_t* slot) const override;
+  int64_t grid_particles() const override { return n_; }
   void exchange_particles(double* a, int per) const override;
   void plan_contact(const std::vector<int64_t>& own, const double* own_x, double reach,
                     std::vector<int64_t>& ghosts, std::vector<double>& ghost_x) const override;
@@ -58,10 +60,13 @@ class HaloExchange : public Halo {
   mutable int64_t bytes = 0, exchanges = 0;
 
  private:
-  // A run of `per` values per particle starting at `offset`.
+  // A run of `per` values per particle starting at `offset`, particle p's
+  // at slot[p] (null: at p).
   struct Field {
     int64_t offset;
     int per;
+    const int32_t* slot = nullptr;
+    int64_t at(int64_t p, int c) const { return offset + per * (slot ? int64_t(slot[p]) : p) + c; }
   };
   // The tile plan's exchange of `fields`, with the contact plan's of
   // `contact` (null: none) in the same round.

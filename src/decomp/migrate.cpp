@@ -12,15 +12,14 @@ constexpr int kPerParticle = 16;  // z: 3 + 2 + 2 + 1, x1: 3, x2: 3, flags, leve
 // Visits every value slot of tile t's particles in the fixed message order.
 template <class F>
 void each_value(Cloth& c, const Tiling& tl, int t, F&& f) {
-  const int64_t n = c.grid.n();
   const TileRange r = tl.range(t);
   for (int i = r.i0; i < r.i1; ++i)
     for (int j = r.j0; j < r.j1; ++j) {
       const int64_t p = c.grid.id(i, j);
       for (int k = 0; k < 3; ++k) f(c.z[3 * p + k]);
-      for (int k = 0; k < 2; ++k) f(c.z[3 * n + 2 * p + k]);
-      for (int k = 0; k < 2; ++k) f(c.z[5 * n + 2 * p + k]);
-      f(c.z[7 * n + p]);
+      for (int k = 0; k < 2; ++k) f(c.force(0, 2 * p + k));
+      for (int k = 0; k < 2; ++k) f(c.force(1, 2 * p + k));
+      f(c.force(2, p));
       for (int k = 0; k < 3; ++k) f(c.x1_at(p)[k]);
       for (int k = 0; k < 3; ++k) f(c.x2_at(p)[k]);
       double fl = c.flags[p], lv = c.level[p];  // small integers: exact as doubles
@@ -31,7 +30,7 @@ void each_value(Cloth& c, const Tiling& tl, int t, F&& f) {
     }
 }
 
-// Room in x1, x2 for the arriving tiles' particles beside those held
+// Room in x1, x2 and the forces for the arriving tiles' particles beside those held
 // already (the rebalance narrows it to the new tiles and ghosts after).
 void hold_arriving(Cloth& c, const Tiling& tl, const std::map<int, std::vector<int>>& in) {
   if (c.slot_of.empty() || in.empty()) return;  // every particle held
@@ -44,7 +43,7 @@ void hold_arriving(Cloth& c, const Tiling& tl, const std::map<int, std::vector<i
     }
   std::sort(held.begin(), held.end());
   held.erase(std::unique(held.begin(), held.end()), held.end());
-  hold_history(c, held);
+  hold_particles(c, held);
 }
 
 int64_t tile_particles(const Tiling& tl, int t) {

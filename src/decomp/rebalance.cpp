@@ -75,7 +75,7 @@ bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, M
   d.partition = partition_with(tl, owner, work, ranks);
   d.owned = d.partition.tiles_of(rank);
   if (d.halo) d.halo->replan(owner);
-  hold_own_history(c, tl, d);  // the new tiles' and ghosts' history, no more
+  hold_own_particles(c, tl, d);  // the new tiles' and ghosts' history and forces, no more
   out.imbalance_after = d.partition.imbalance;
   out.edge_cut = d.partition.edge_cut;
   out.tiles_moved = m.tiles_moved;

@@ -40,7 +40,6 @@ const int64_t kOldestReadable = 5;
 // Sum over the given blocks of a hash of everything a particle carries
 // (its edges' eased rest lengths too, when given).
 uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks, const std::vector<double>& eased) {
-  const int64_t n = c.grid.n();
   uint64_t sum = 0;
   for (const Block& b : blocks)
     for (int i = b.i0; i < b.i1; ++i)
@@ -54,10 +53,10 @@ uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks, const std::
           h.add(x2[k]);
         }
         for (int k = 0; k < 2; ++k) {
-          h.add(c.z[3 * n + 2 * p + k]);
-          h.add(c.z[5 * n + 2 * p + k]);
+          h.add(c.force(0, 2 * p + k));
+          h.add(c.force(1, 2 * p + k));
         }
-        h.add(c.z[7 * n + p]);
+        h.add(c.force(2, p));
         h.add(uint64_t(c.flags[p]));
         h.add(uint64_t(c.level[p]));
         if (!eased.empty()) {
@@ -190,27 +189,13 @@ void write_fabric(hid_t root, const Fabric& fabric, int rank, const Writer& w) {
   }
 }
 
-// x1 or x2 of the owned blocks' particles, held in slots (several ranks):
-// packed in the file selection's order (ascending grid id), the memory
-// side a plain run of them.
-void write_history(hid_t group, const std::string& name, const Cloth& c, const std::vector<double>& x,
-                   const std::vector<Block>& owned, const Writer& w) {
-  Selection s = select_blocks(owned, c.grid.ni, c.grid.nj, 3);
-  if (c.slot_of.empty()) {
-    w.dataset(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, x.data(), s);
-    return;
-  }
-  std::vector<int64_t> ids;
-  for (const Block& b : owned)
-    for (int i = b.i0; i < b.i1; ++i)
-      for (int j = b.j0; j < b.j1; ++j) ids.push_back(c.grid.id(i, j));
-  std::sort(ids.begin(), ids.end());
+// `per` values a particle (x1, x2, a force block) of the owned blocks'
+// particles, held in slots on several ranks (select_held).
+void write_held(hid_t group, const std::string& name, const Cloth& c, const double* x, int per,
+                const std::vector<Block>& owned, const Writer& w) {
   std::vector<double> packed;
-  packed.reserve(3 * ids.size());
-  for (int64_t p : ids) packed.insert(packed.end(), &x[size_t(3 * c.slot(p))], &x[size_t(3 * c.slot(p) + 3)]);
-  s.mem = make_space({hsize_t(packed.size())});
-  if (packed.empty()) check_status(H5Sselect_none(s.mem.get()), "selecting nothing");
-  w.dataset(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, packed.data(), s);
+  const Selection s = select_held(owned, c.grid.ni, c.grid.nj, per, c.slots(), x, packed);
+  w.dataset(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c.slots() ? packed.data() : x, s);
 }
 
 void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, const std::vector<double>& eased,
@@ -218,15 +203,14 @@ void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, co
   Handle g = w.group(root, "state");
   const int ni = c.grid.ni, nj = c.grid.nj;
   const Selection s1 = select_blocks(owned, ni, nj, 1);
-  const Selection s2 = select_blocks(owned, ni, nj, 2);
   const Selection s3 = select_blocks(owned, ni, nj, 3);
   const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c8 = H5T_NATIVE_UINT8;
   w.dataset(g.get(), "positions", f64, d, c.x(), s3);
-  w.dataset(g.get(), "tension", f64, d, c.tension(), s2);
-  w.dataset(g.get(), "moment", f64, d, c.moment(), s2);
-  w.dataset(g.get(), "shear", f64, d, c.shear(), s1);
-  write_history(g.get(), "x1", c, c.x1, owned, w);
-  write_history(g.get(), "x2", c, c.x2, owned, w);
+  write_held(g.get(), "tension", c, c.tension(), 2, owned, w);
+  write_held(g.get(), "moment", c, c.moment(), 2, owned, w);
+  write_held(g.get(), "shear", c, c.shear(), 1, owned, w);
+  write_held(g.get(), "x1", c, c.x1.data(), 3, owned, w);
+  write_held(g.get(), "x2", c, c.x2.data(), 3, owned, w);
   w.dataset(g.get(), "flags", u8, c8, c.flags.data(), s1);
   w.dataset(g.get(), "level", u8, c8, c.level.data(), s1);
   if (!eased.empty()) w.dataset(g.get(), "eased_rest", f64, d, eased.data(), s2);
@@ -398,7 +382,7 @@ void read_state(hid_t root, Cloth& c) {
   if (H5Lexists(root, "state", H5P_DEFAULT) <= 0) fail("group 'state' is missing");
   Handle g(check(H5Gopen2(root, "state", H5P_DEFAULT), "opening group 'state'"), H5Gclose);
   const int64_t n = c.grid.n();
-  c.layout.n = n;
+  c.layout.n = c.layout.m = n;
   c.z.assign(c.layout.size(), 0.0);
   c.x1.assign(3 * n, 0.0);
   c.x2.assign(3 * n, 0.0);
@@ -497,7 +481,8 @@ void restore_state(const CheckpointState& ck, Cloth& cloth) {
   if (s.grid.ni != cloth.grid.ni || s.grid.nj != cloth.grid.nj)
     throw InputError("checkpoint " + ck.path + ": its grid does not match the scene's");
   cloth.z = s.z;
-  cloth.x1 = s.x1;  // the grid's: decomposing narrows them (hold_own_history)
+  cloth.layout = s.layout;
+  cloth.x1 = s.x1;  // the grid's: decomposing narrows them (hold_own_particles)
   cloth.x2 = s.x2;
   cloth.slot_of.clear();
   ++cloth.held_version;

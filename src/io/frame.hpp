@@ -22,6 +22,9 @@ struct FrameView {
   const double* tension = nullptr;   // 2 per particle: slot [p][d], N/m
   const double* moment = nullptr;    // 2 per particle: slot [p][d], N*m/m
   const double* shear = nullptr;     // 1 per particle, N/m
+  // The three force arrays hold particle p at slot[p] (Cloth::slot_of:
+  // a rank's own and ghost particles only); null: at p.
+  const int32_t* slot = nullptr;
   const uint8_t* flags = nullptr;    // ParticleFlag
   const uint8_t* level = nullptr;    // AMRC level
   std::vector<Block> owned;          // this rank's part; written collectively

@@ -119,6 +119,23 @@ Selection select_blocks(const std::vector<Block>& owned, int ni, int nj, int com
   return s;
 }
 
+Selection select_held(const std::vector<Block>& owned, int ni, int nj, int comps, const int32_t* slot,
+                      const double* x, std::vector<double>& packed) {
+  Selection s = select_blocks(owned, ni, nj, comps);
+  packed.clear();
+  if (!slot) return s;
+  std::vector<int64_t> ids;
+  for (const Block& b : owned)
+    for (int i = b.i0; i < b.i1; ++i)
+      for (int j = b.j0; j < b.j1; ++j) ids.push_back(int64_t(i) * nj + j);
+  std::sort(ids.begin(), ids.end());
+  packed.reserve(size_t(comps) * ids.size());
+  for (int64_t p : ids) packed.insert(packed.end(), x + comps * int64_t(slot[p]), x + comps * (int64_t(slot[p]) + 1));
+  s.mem = make_space({hsize_t(packed.size())});
+  if (packed.empty()) check_status(H5Sselect_none(s.mem.get()), "selecting nothing");
+  return s;
+}
+
 // Dataset creation without modification times, so identical runs give
 // identical files.
 Handle untimed_dcpl() {

@@ -83,6 +83,13 @@ struct Selection {
   hsize_t count = 0;  // elements selected
 };
 Selection select_blocks(const std::vector<Block>& owned, int ni, int nj, int comps);
+// The same file selection for an array of `comps` values a particle held
+// at slot[p] (Cloth::slot_of; null: at p, as select_blocks): the owned
+// blocks' values packed into `packed` in the file selection's order
+// (ascending grid id), the memory side a plain run of them; write from
+// `packed` then, or from x where slot is null.
+Selection select_held(const std::vector<Block>& owned, int ni, int nj, int comps, const int32_t* slot,
+                      const double* x, std::vector<double>& packed);
 
 // Collective: creates `name` under `group` and writes this rank's selection.
 void write_dataset(hid_t group, const std::string& name, hid_t file_type, hid_t mem_type,

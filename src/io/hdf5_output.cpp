@@ -406,9 +406,16 @@ void Hdf5Output::Impl::write(const FrameView& f) {
     agreed([&] { write_dataset(g, ds, file_type, mem_type, v, s, x); });
   };
   put("positions", f64, d, f.x, s3);
-  if (f.tension) put("tension", f64, d, f.tension, s2);
-  if (f.moment) put("moment", f64, d, f.moment, s2);
-  if (f.shear) put("shear", f64, d, f.shear, s1);
+  // The forces, held in slots on several ranks.
+  auto put_held = [&](const char* ds, const double* v, int comps, const Selection& s) {
+    if (!f.slot) return put(ds, f64, d, v, s);
+    std::vector<double> packed;
+    const Selection held = select_held(f.owned, ni, nj, comps, f.slot, v, packed);
+    put(ds, f64, d, packed.data(), held);
+  };
+  if (f.tension) put_held("tension", f.tension, 2, s2);
+  if (f.moment) put_held("moment", f.moment, 2, s2);
+  if (f.shear) put_held("shear", f.shear, 1, s1);
   put("active", u8, c, active.data(), s1);
   put("flags", u8, c, f.flags, s1);
   if (f.level) put("level", u8, c, f.level, s1);

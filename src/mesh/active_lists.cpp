@@ -31,7 +31,6 @@ void build_one(const Tiling& tiling, const std::vector<int>& owned, int per_part
 // Per tile: for each block of z, for each row, the entries of its active
 // unknowns in ascending order (the order of a full tile-ordered dot product).
 void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned, IndexRuns& runs) {
-  const int64_t n = c.grid.n();
   std::vector<int64_t>& b = runs.bounds;
   b.clear();
   runs.tile_begin.assign(owned.size() + 1, 0);
@@ -57,14 +56,14 @@ void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>
     });
     rows([&](int64_t p) {
       for (int d = 0; d < 2; ++d)
-        if (c.edge_on[2 * p + d]) add(3 * n + 2 * p + d);
+        if (c.edge_on[2 * p + d]) add(c.force_index(0, 2 * p + d));
     });
     rows([&](int64_t p) {
       for (int d = 0; d < 2; ++d)
-        if (c.triple_on[2 * p + d]) add(5 * n + 2 * p + d);
+        if (c.triple_on[2 * p + d]) add(c.force_index(1, 2 * p + d));
     });
     rows([&](int64_t p) {
-      if (c.shear_on[p]) add(7 * n + p);
+      if (c.shear_on[p]) add(c.force_index(2, p));
     });
   }
   runs.tile_begin[owned.size()] = runs.count();

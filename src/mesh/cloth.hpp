@@ -6,8 +6,10 @@
 //   shear  slot p   : the cell (a leaf of the active mesh) whose lower corner is p
 // AMRC switches slots on and off; nothing is reallocated during a run.
 //
-// The unknowns live in one vector z = [x (3N) | tension (2N) | moment (2N) |
-// shear (N)] so the minimizer works on a single array.
+// The unknowns live in one vector z = [x (3N) | tension (2M) | moment (2M) |
+// shear (M)] so the minimizer works on a single array: positions at grid
+// ids, element forces at their first particle's slot (Cloth::slot; M = N
+// on one rank, the rank's tiles' and ghosts' particles on several).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -52,14 +54,20 @@ struct alignas(64) GatherRow {
   int32_t at[16];
 };
 
-// Offsets of the unknown blocks in z.
+// Offsets of the unknown blocks in z: n grid particles' positions, then
+// the forces of m slots' elements (2 edges, 2 triples and a cell a slot).
 struct Layout {
-  int64_t n = 0;
+  int64_t n = 0, m = 0;
   int64_t x() const { return 0; }
   int64_t tension() const { return 3 * n; }
-  int64_t moment() const { return 5 * n; }
-  int64_t shear() const { return 7 * n; }
-  int64_t size() const { return 8 * n; }
+  int64_t moment() const { return 3 * n + 2 * m; }
+  int64_t shear() const { return 3 * n + 4 * m; }
+  int64_t size() const { return 3 * n + 5 * m; }
+  // Where force block b (0 tension, 1 moment, 2 shear) starts.
+  int64_t block(int b) const { return b == 0 ? tension() : b == 1 ? moment() : shear(); }
+  // z's index of the force of element slot s (2p+d, or p for a cell) of
+  // block b, its particle p at slot q.
+  int64_t force(int b, int64_t s, int64_t q) const { return b < 2 ? block(b) + 2 * q + (s & 1) : block(b) + q; }
 };
 
 struct Cloth {
@@ -68,10 +76,12 @@ struct Cloth {
   std::vector<double> z;         // unknowns (see Layout)
   // Positions at the start of this step and the one before, 3 values for
   // each particle this rank holds (its tiles' and its ghosts'), at slot(p):
-  // on several ranks not sized by the grid (hold_history).
+  // on several ranks not sized by the grid (hold_particles), nor are z's
+  // force blocks.
   std::vector<double> x1, x2;
-  // Each particle's slot in x1, x2 (-1: not held here); empty: every
-  // particle, at its grid id. `held_version` changes with it.
+  // Each particle's slot in x1, x2 and z's force blocks (-1: not held
+  // here); empty: every particle, at its grid id. `held_version` changes
+  // with it.
   std::vector<int32_t> slot_of;
   uint64_t held_version = 0;
   std::vector<double> mass;      // kg per particle: density * area it represents
@@ -82,9 +92,11 @@ struct Cloth {
   std::vector<int32_t> next[2], prev[2];
   // Element slot switches (1 = active element).
   std::vector<uint8_t> edge_on, triple_on, shear_on;
-  // Shear cells: cell[k][s] is corner k+1 of slot s's cell (k = 0: along i
-  // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k][p]
-  // is the slot whose corner k+1 p is (at most one: the leaves tile the cloth).
+  // Shear cells: cell[k] holds corner k+1 of slot s's cell (k = 0: along i
+  // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k]
+  // the slot whose corner k+1 p is (at most one: the leaves tile the
+  // cloth). Held in slots like x1 (several ranks: the rank's tiles' and
+  // ghosts' particles): read through cell_at and corner_at.
   std::vector<int32_t> cell[3], corner_of[3];
   // The elements' rest geometry is not held here: the evaluator keeps its
   // own elements' in list order (mesh/topology.hpp computes it).
@@ -108,6 +120,15 @@ struct Cloth {
   const double* x1_at(int64_t p) const { return &x1[size_t(3 * slot(p))]; }
   double* x2_at(int64_t p) { return &x2[size_t(3 * slot(p))]; }
   const double* x2_at(int64_t p) const { return &x2[size_t(3 * slot(p))]; }
+  // Corner k+1 of the cell at slot s (held); the cell p is corner k+1 of
+  // (-1: none, or p not held here).
+  int64_t cell_at(int k, int64_t s) const { return cell[k][size_t(slot(s))]; }
+  int64_t corner_at(int k, int64_t p) const { return holds(p) ? int64_t(corner_of[k][size_t(slot(p))]) : -1; }
+  // z's index of element slot s's force in block b (0 tension, 1 moment,
+  // 2 shear: Layout::force); its particle must be held.
+  int64_t force_index(int b, int64_t s) const { return layout.force(b, s, slot(b < 2 ? s >> 1 : s)); }
+  double& force(int b, int64_t s) { return z[size_t(force_index(b, s))]; }
+  double force(int b, int64_t s) const { return z[size_t(force_index(b, s))]; }
 
   bool active(int64_t p) const { return flags[p] & kActive; }
   bool free(int64_t p) const { return (flags[p] & (kActive | kFixed | kHanging)) == kActive; }
@@ -117,16 +138,17 @@ struct Cloth {
 // A shear cell at slot s: ids = [s, along i, along j, across] (on slots only).
 inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
   ids[0] = s;
-  for (int k = 0; k < 3; ++k) ids[k + 1] = c.cell[k][s];
+  for (int k = 0; k < 3; ++k) ids[k + 1] = c.cell_at(k, s);
 }
 
 // Particle p's index in an array held in slots (Cloth::slots; null: p).
 inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(slot[p]) : p; }
 
-// x1, x2 for the particles `held` (ascending grid ids) only, in that order:
-// values of particles held before carried over, the others 0.
-void hold_history(Cloth& c, const std::vector<int64_t>& held);
-// The particles c holds x1, x2 for, ascending.
+// x1, x2, z's forces and the cells' corners for the particles `held`
+// (ascending grid ids) only, in that order: values of particles held before
+// carried over, the others 0 (-1 for the corners: rebuild_topology then).
+void hold_particles(Cloth& c, const std::vector<int64_t>& held);
+// The particles c holds x1, x2 and forces for, ascending.
 std::vector<int64_t> held_particles(const Cloth& c);
 
 }  // namespace drape

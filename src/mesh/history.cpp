@@ -1,4 +1,5 @@
-// A rank's step history (x1, x2) for the particles it holds only.
+// A rank's step history (x1, x2) and element forces for the particles it holds only.
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 
@@ -13,9 +14,36 @@ std::vector<int64_t> held_particles(const Cloth& c) {
   return held;
 }
 
-void hold_history(Cloth& c, const std::vector<int64_t>& held) {
+namespace {
+// z's force blocks for the slots `slot` (m of them), carried from c's.
+std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
+  Layout L{c.layout.n, int64_t(held.size())};
+  std::vector<double> z(size_t(L.size()), 0.0);
+  std::copy(c.z.begin(), c.z.begin() + 3 * c.layout.n, z.begin());
+  for (int64_t p : held) {
+    if (!c.holds(p)) continue;
+    const int64_t q = slot[size_t(p)];
+    for (int b = 0; b < 3; ++b)
+      for (int64_t s = b < 2 ? 2 * p : p, e = b < 2 ? 2 * p + 2 : p + 1; s < e; ++s)
+        z[size_t(L.force(b, s, q))] = c.force(b, s);
+  }
+  return z;
+}
+// The cells' corner tables for the slots `slot`, carried from c's.
+void hold_cells(Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
+  for (std::vector<int32_t>* t : {c.cell, c.corner_of})
+    for (int k = 0; k < 3; ++k) {
+      std::vector<int32_t> out(held.size(), -1);
+      for (int64_t p : held)
+        if (c.holds(p)) out[size_t(slot[size_t(p)])] = t[k][size_t(c.slot(p))];
+      t[k].swap(out);
+    }
+}
+}  // namespace
+
+void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
   if (held.size() > size_t(std::numeric_limits<int32_t>::max() / 3))
-    throw std::length_error("hold_history: more particles than 32-bit slots reach");
+    throw std::length_error("hold_particles: more particles than 32-bit slots reach");
   std::vector<int32_t> slot(size_t(c.grid.n()), -1);
   std::vector<double> x1(3 * held.size(), 0.0), x2(3 * held.size(), 0.0);
   for (size_t s = 0; s < held.size(); ++s) {
@@ -27,9 +55,13 @@ void hold_history(Cloth& c, const std::vector<int64_t>& held) {
       x2[3 * s + k] = c.x2_at(p)[k];
     }
   }
+  std::vector<double> z = held_z(c, slot, held);
+  hold_cells(c, slot, held);
   c.slot_of.swap(slot);
   c.x1.swap(x1);
   c.x2.swap(x2);
+  c.z.swap(z);
+  c.layout.m = int64_t(held.size());
   ++c.held_version;
 }
 

@@ -12,9 +12,9 @@ namespace {
 // tree, the finest cells whose four sides are mesh edges.
 void rebuild_cells(Cloth& c, bool shear_enabled, const Quadtree* tree) {
   const Grid& g = c.grid;
-  for (int k = 0; k < 3; ++k) {
-    c.cell[k].assign(g.n(), -1);  // same sizes during a run: no allocation
-    c.corner_of[k].assign(g.n(), -1);
+  for (int k = 0; k < 3; ++k) {  // the held particles' (same sizes between holds: no allocation)
+    c.cell[k].assign(size_t(c.layout.m), -1);
+    c.corner_of[k].assign(size_t(c.layout.m), -1);
   }
   c.shear_on.assign(g.n(), 0);
   if (!shear_enabled) return;
@@ -22,8 +22,8 @@ void rebuild_cells(Cloth& c, bool shear_enabled, const Quadtree* tree) {
     c.shear_on[s] = 1;
     const int64_t corner[3] = {a, b, d};
     for (int k = 0; k < 3; ++k) {
-      c.cell[k][s] = corner[k];
-      c.corner_of[k][corner[k]] = s;
+      if (c.holds(s)) c.cell[k][size_t(c.slot(s))] = int32_t(corner[k]);
+      if (c.holds(corner[k])) c.corner_of[k][size_t(c.slot(corner[k]))] = int32_t(s);
     }
   };
   if (tree) {
@@ -145,7 +145,7 @@ RestGeometry triple_rest_geometry(const Cloth& c, int64_t s) {
 // A cell stands for its own area.
 double cell_area(const Cloth& c, int64_t s) {
   const Grid& g = c.grid;
-  return double(c.cell[0][s] - s) / g.nj * g.hi * double(c.cell[1][s] - s) * g.hj;
+  return double(c.cell_at(0, s) - s) / g.nj * g.hi * double(c.cell_at(1, s) - s) * g.hj;
 }
 
 }  // namespace drape

@@ -202,18 +202,18 @@ void Minimizer::for_each_compact(F&& f) {
   int64_t b[5];
   block_starts(b);
   const ActiveList* L[4] = {&lists_.particles, &lists_.edges, &lists_.triples, &lists_.shears};
-  const int64_t z0[4] = {0, c_.layout.tension(), c_.layout.moment(), c_.layout.shear()};
+  const Cloth& cl = c_;
   timed_region([&] {
     for (int k = 0; k < 4; ++k) {
       const int64_t* items = L[k]->items.data();
-      const int64_t n = L[k]->size(), c0 = b[k], zk = z0[k];
+      const int64_t n = L[k]->size(), c0 = b[k];
       if (k == 0) {
 #pragma omp for schedule(static) nowait
         for (int64_t r = 0; r < n; ++r)
           for (int j = 0; j < 3; ++j) f(3 * r + j, 3 * items[r] + j);
       } else {
 #pragma omp for schedule(static) nowait
-        for (int64_t r = 0; r < n; ++r) f(c0 + r, zk + items[r]);
+        for (int64_t r = 0; r < n; ++r) f(c0 + r, cl.force_index(k - 1, items[r]));
       }
     }
   });

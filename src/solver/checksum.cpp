@@ -12,10 +12,10 @@ uint64_t particle_hash(const Cloth& c, int64_t p, uint64_t seed) {
   Hasher h(seed ^ uint64_t(p));
   for (int k = 0; k < 3; ++k) h.add(c.x()[3 * p + k]);
   for (int d = 0; d < 2; ++d) {
-    h.add(c.tension()[2 * p + d]);
-    h.add(c.moment()[2 * p + d]);
+    h.add(c.force(0, 2 * p + d));
+    h.add(c.force(1, 2 * p + d));
   }
-  h.add(c.shear()[p]);
+  h.add(c.force(2, p));
   h.add(uint64_t(c.flags[p]));
   h.add(uint64_t(c.level[p]));
   return h.value();

@@ -322,7 +322,7 @@ void Evaluator::build_rows() {
     nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
   });
   place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
-    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell[k][s]);
+    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell_at(k, s));
   });
   const ActiveList& pl = lists_.particles;
   // Each thread walks the lists beside its run of the particle list.
@@ -574,7 +574,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
   active_.note(0, pos, L / L0 - 1.0, bv, st);
-  const double f = settle ? (settle[c_.layout.tension() + s] = st.f) : z[c_.layout.tension() + s];
+  const double f = settle ? (settle[c_.force_index(0, s)] = st.f) : z[c_.force_index(0, s)];
   if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeEntry * pos], g[1], f * w);
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
@@ -601,7 +601,7 @@ void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], con
   for (int l = 0; l < 4; ++l) {
     const Band::Stop stl{st.f[l], st.df_dq[l]};
     if (active_.enabled()) active_.note(0, pos + l, q[l], lane_value(b4, l), stl);
-    const int64_t t = c_.layout.tension() + s[l];
+    const int64_t t = c_.force_index(0, s[l]);
     f[l] = settle ? (settle[t] = stl.f) : z[t];
     if (settle && keep_)
       edge_kept(z + 3 * (s[l] >> 1), z + 3 * int64_t(nb_e_[pos + l]), L[l], std::max(0.0, stl.f), stl.df_dq / L0[l],
@@ -626,7 +626,7 @@ void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], 
   for (int l = 0; l < 4; ++l) {
     const Band::Stop stl{st.f[l], st.df_dq[l]};
     if (active_.enabled()) active_.note(1, pos + l, q[l], lane_value(b4, l), stl);
-    const int64_t m = c_.layout.moment() + s[l];
+    const int64_t m = c_.force_index(1, s[l]);
     f[l] = settle ? (settle[m] = stl.f) : z[m];
     if ((settle && keep_) || narrow_) kept_bend(w[l] * stl.df_dq / Lm[l], g[l], &kg_t_[kKgTriple * (pos + l)]);
     if (narrow_)
@@ -686,7 +686,7 @@ void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], con
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   active_.note(1, pos, th / Lm, bv, st);
-  const double f = settle ? (settle[c_.layout.moment() + s] = st.f) : z[c_.layout.moment() + s];
+  const double f = settle ? (settle[c_.force_index(1, s)] = st.f) : z[c_.force_index(1, s)];
   if ((settle && keep_) || narrow_) kept_bend(w * st.df_dq / Lm, g, &kg_t_[kKgTriple * pos]);
   if (narrow_)
     buf_t_[pos] = f * w;
@@ -712,7 +712,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   active_.note(2, pos, phi, bv, st);
-  const double f = settle ? (settle[c_.layout.shear() + s] = st.f) : z[c_.layout.shear() + s];
+  const double f = settle ? (settle[c_.force_index(2, s)] = st.f) : z[c_.force_index(2, s)];
   if ((settle && keep_) || narrow_) kept_gradients(A * st.df_dq, g, 4, &kg_s_[kKgCell * pos]);
   if (narrow_)
     buf_s_[pos] = f * A;
@@ -762,7 +762,7 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
   for (int l = 0; l < 4; ++l) {
     const Band::Stop stl{st.f[l], st.df_dq[l]};
     if (active_.enabled()) active_.note(2, pos + l, phi[l], lane_value(b4, l), stl);
-    const int64_t t = c_.layout.shear() + s[l];
+    const int64_t t = c_.force_index(2, s[l]);
     f[l] = settle ? (settle[t] = stl.f) : z[t];
     if ((settle && keep_) || narrow_) kept_gradients(A[l] * stl.df_dq, g[l], 4, &kg_s_[kKgCell * (pos + l)]);
     if (narrow_)
@@ -849,7 +849,7 @@ void Evaluator::edge_gradient(const ItemRun& run, const double* z, double* grad)
 // hv: the length's Hessian times (rb - ra).
 void Evaluator::edge_gradient_out(int64_t s, int64_t pos, const V& ra, const V& rb, const V g[2], const V& hv,
                                   const double* z, double* grad) {
-  const double w = width_e_[pos], f = z[c_.layout.tension() + s];
+  const double w = width_e_[pos], f = z[c_.force_index(0, s)];
   const double fw = f * w / m_.force_scale, gq = gq_e_[pos];
   put(&buf_e_[kEdgeEntry * pos], fw * hv + gq * g[1], 1.0);  // the first end's is (-fw) hv + gq g[0]
   if (double* o = force_entry(grad, 0, s, pos)) *o = w * (dot(g[0], ra) + dot(g[1], rb)) / m_.force_scale + gf_e_[pos];
@@ -883,7 +883,7 @@ void Evaluator::triple_gradient(const ItemRun& run, const double* z, double* gra
 
 void Evaluator::triple_gradient_out(int64_t s, int64_t pos, const V r[3], const V g[3], const V hr[3],
                                     const double* z, double* grad) {
-  const double w = width_t_[pos], f = z[c_.layout.moment() + s];
+  const double w = width_t_[pos], f = z[c_.force_index(1, s)];
   const double fw = f * w / m_.force_scale, gq = gq_t_[pos];
   double gr = 0;
   for (int k = 0; k < 3; ++k) {
@@ -901,7 +901,7 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[4], hr[4];
   shear_cell_hv(a.x, r, g, hr);
-  const double A = area_s_[pos], f = z[c_.layout.shear() + s];
+  const double A = area_s_[pos], f = z[c_.force_index(2, s)];
   const double fa = f * A / m_.force_scale, gq = gq_s_[pos];
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
@@ -935,7 +935,7 @@ void Evaluator::shear_gradient_four(const ItemRun& run, int64_t k, const double*
       x[c][l] = at(z, ids[c]);
       r[c][l] = residual_of(c_, rho_grid_, ids[c]);
     }
-    f[l] = z[c_.layout.shear() + s[l]];
+    f[l] = z[c_.force_index(2, s[l])];
   }
   V4 X[4], R[4], G[4], H[4];
   for (int c = 0; c < 4; ++c) {
@@ -1073,7 +1073,7 @@ CostTerms Evaluator::evaluate_as(double* z, double* grad, bool compact) {
   settled_ = false;
   kg_ready_ = kg_ready_ && !narrow_;  // narrow, the pass keeps the elements' numbers at z
   refresh_pairs(z);
-  halo_.exchange(z, Halo::kAll);
+  halo_.exchange(z, Halo::kAll, c_.layout, c_.slots());
   interpolate_hanging(z);
   if (!grad) return cost_pass(z, nullptr, false);
   size_slopes();
@@ -1084,7 +1084,7 @@ CostTerms Evaluator::cost_for_gradient(double* z) {
   list_rows();
   settled_ = false;
   refresh_pairs(z);
-  halo_.exchange(z, Halo::kAll);
+  halo_.exchange(z, Halo::kAll, c_.layout, c_.slots());
   interpolate_hanging(z);
   size_slopes();
   const CostTerms cost = cost_pass(z, nullptr, true);
@@ -1287,7 +1287,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
   widen();
   list_rows();
   refresh_pairs(z);
-  halo_.exchange(z, Halo::kAll);
+  halo_.exchange(z, Halo::kAll, c_.layout, c_.slots());
   interpolate_hanging(z);
   const double F0 = m_.force_scale, inv2 = 1.0 / (F0 * F0);
   for_each_unknown_entry(diag, [](double& d) { d = 1.0; });
@@ -1309,7 +1309,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     const int64_t q = nb_e_[pos];
     V g[2];
     const double L = edge_length(at(z, p), at(z, q), g);
-    const double L0 = rest_e_[pos], w = width_e_[pos], f = z[c_.layout.tension() + s];
+    const double L0 = rest_e_[pos], w = width_e_[pos], f = z[c_.force_index(0, s)];
     const double eps = L / L0 - 1;
     const double geo = f * w / L, band = w * band_slope(anc_e_[pos], m_.stretch[d], f, eps) / L0;
     buf_e_[kEdgeEntry * pos] = (2 * geo * geo + band * band) * inv2;  // both ends'
@@ -1323,7 +1323,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     V g[3];
     const V n = load3<double>(&axis_t_[3 * pos]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
-    const double Lm = rest_t_[pos], w = width_t_[pos], f = z[c_.layout.moment() + s];
+    const double Lm = rest_t_[pos], w = width_t_[pos], f = z[c_.force_index(1, s)];
     const double slope =
         band_slope(anc_t_[pos], m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
@@ -1343,7 +1343,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     const CellAt a = cell_at(ids, z);
     V g[4];
     const double phi = shear_cell(a.x, g);
-    const double A = area_s_[pos], Lr = root_s_[pos], f = z[c_.layout.shear() + s];
+    const double A = area_s_[pos], Lr = root_s_[pos], f = z[c_.force_index(2, s)];
     const double slope = band_slope(anc_s_[pos], m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 4; ++k) {
@@ -1441,9 +1441,9 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
     for (int k = 0; k < 3; ++k) diff(3 * p + k, p, hmin);
   // An element's position in its list is its index there (this rank's own).
   const std::vector<int64_t>&e = lists_.edges.items, &t = lists_.triples.items, &c = lists_.shears.items;
-  for (size_t k = 0; k < e.size(); ++k) diff(c_.layout.tension() + e[k], e[k] >> 1, F0 / width_e_[k]);
-  for (size_t k = 0; k < t.size(); ++k) diff(c_.layout.moment() + t[k], t[k] >> 1, F0 * rest_t_[k] / width_t_[k]);
-  for (size_t k = 0; k < c.size(); ++k) diff(c_.layout.shear() + c[k], c[k], F0 * root_s_[k] / area_s_[k]);
+  for (size_t k = 0; k < e.size(); ++k) diff(c_.force_index(0, e[k]), e[k] >> 1, F0 / width_e_[k]);
+  for (size_t k = 0; k < t.size(); ++k) diff(c_.force_index(1, t[k]), t[k] >> 1, F0 * rest_t_[k] / width_t_[k]);
+  for (size_t k = 0; k < c.size(); ++k) diff(c_.force_index(2, c[k]), c[k], F0 * root_s_[k] / area_s_[k]);
   // Leave the buffers as evaluate() would have: at z.
   evaluate(z, nullptr);
   return cost;

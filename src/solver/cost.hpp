@@ -365,8 +365,7 @@ class Evaluator {
   // 2 cell), slot s, keeps its force's entry in the gradient or diagonal;
   // null for the ring's in the compact order (other ranks' unknowns).
   double* force_entry(double* out, int kind, int64_t s, int64_t pos) const {
-    const int64_t block[3] = {c_.layout.tension(), c_.layout.moment(), c_.layout.shear()};
-    if (!compact_) return out + block[kind] + s;
+    if (!compact_) return out + c_.force_index(kind, s);
     const ActiveList* own[3] = {&lists_.edges, &lists_.triples, &lists_.shears};
     return pos < own[kind]->size() ? out + compact_block(kind + 1) + pos : nullptr;
   }
@@ -512,7 +511,7 @@ class Evaluator {
   template <class F>
   void cell_particles(int64_t s, F&& f) const {
     f(0, s);
-    for (int k = 0; k < 3; ++k) f(k + 1, c_.cell[k][s]);
+    for (int k = 0; k < 3; ++k) f(k + 1, c_.cell_at(k, s));
   }
   void clear_hanging(std::vector<double>& a);
   double window_cost(const double* z, int ic, int jc);
@@ -708,7 +707,7 @@ void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
   if (c_.shear_on[p]) visit(GatherRow::kShear, 2, p, 0);
   // p as corner 1, 2, 3 (along i, along j, across) of the cells below it.
   for (int k = 0; k < 3; ++k) {
-    const int64_t q = c_.corner_of[k][p];
+    const int64_t q = c_.corner_at(k, p);
     if (q >= 0) visit(GatherRow::kShear + k + 1, 2, q, k + 1);
   }
 }

@@ -10,15 +10,23 @@
 #include <functional>
 #include <vector>
 
+#include "mesh/cloth.hpp"
+
 namespace drape {
 
 class Halo {
  public:
   enum Blocks { kPositions = 1, kForces = 2, kAll = 3 };
   virtual ~Halo() = default;
-  // Refreshes the ghost entries of `z` (laid out like Cloth::z; with
-  // kPositions alone, any array of 3 values per particle such as x1).
-  virtual void exchange(double* z, int blocks) const = 0;
+  // Refreshes the ghost entries of `z` (laid out like Cloth::z over the
+  // whole grid, no slots; with kPositions alone, any array of 3 values per
+  // grid particle).
+  void exchange(double* z, int blocks) const { exchange(z, blocks, Layout{grid_particles(), grid_particles()}, nullptr); }
+  // The same for z laid out as `layout`, its forces at slot[p] (Cloth::slots;
+  // null: at p).
+  virtual void exchange(double* z, int blocks, const Layout& layout, const int32_t* slot) const = 0;
+  // The particles of the grid the exchanges run over.
+  virtual int64_t grid_particles() const { return 0; }
   // The same for an array of `per` values per particle (residuals).
   virtual void exchange_particles(double* a, int per) const = 0;
   // Contact ghosts (self-contact's partners on other ranks, docs/design.md
@@ -60,7 +68,8 @@ class Halo {
 // One rank owning every tile: there are no ghosts.
 class NoHalo : public Halo {
  public:
-  void exchange(double*, int) const override {}
+  using Halo::exchange;
+  void exchange(double*, int, const Layout&, const int32_t*) const override {}
   void exchange_particles(double*, int) const override {}
 };
 

@@ -1,5 +1,7 @@
 #include "solver/memory_table.hpp"
 
+#include <algorithm>
+
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
 
@@ -20,9 +22,12 @@ size_t runs_bytes(const IndexRuns& r) { return cap(r.bounds) + cap(r.tile_begin)
 
 void add_memory(MemoryTable& t, const Cloth& c) {
   const char* o = "Cloth";
-  t.add(o, "z (positions, forces)", c.z);
+  // z's positions follow the grid; its forces the slots (Layout).
+  const size_t forces = size_t(c.z.size() - std::min(c.z.size(), size_t(3 * c.layout.n))) * sizeof(double);
+  t.add(o, "z's positions", cap(c.z) - forces);
+  t.add(o, "z's forces", forces);
   t.add(o, "x1, x2 (earlier positions)", cap(c.x1) + cap(c.x2));
-  t.add(o, "x1, x2's slots (several ranks)", c.slot_of);
+  t.add(o, "slots of x1, x2, the forces and cells (several ranks)", c.slot_of);
   t.add(o, "mass, flags, level", cap(c.mass) + cap(c.flags) + cap(c.level));
   t.add(o, "next, prev (neighbour tables)", cap(c.next[0]) + cap(c.next[1]) + cap(c.prev[0]) + cap(c.prev[1]));
   t.add(o, "element switches", cap(c.edge_on) + cap(c.triple_on) + cap(c.shear_on));

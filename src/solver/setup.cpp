@@ -102,7 +102,7 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   g.hi = scene.cloth.size[0] / (g.ni - 1);
   g.hj = scene.cloth.size[1] / (g.nj - 1);
   const int64_t n = g.n();
-  c.layout.n = n;
+  c.layout.n = c.layout.m = n;
   c.z.assign(c.layout.size(), 0.0);
   c.x1.assign(3 * n, 0.0);
   c.x2.assign(3 * n, 0.0);

@@ -59,16 +59,16 @@ void Evaluator::hysteresis_forces(double* z) {
   settled_ = false;
   halo_.exchange(z, Halo::kPositions);  // ring elements' forces are computed here too
   interpolate_hanging(z);
-  const Layout& L = c_.layout;
+  const Cloth& c = c_;
   element_passes(
       [&](int64_t s, int64_t pos) {
-        z[L.tension() + s] = m_.stretch[s & 1].stop(anc_e_[pos], edge_strain_at(z, s, pos)).f;
+        z[c.force_index(0, s)] = m_.stretch[s & 1].stop(anc_e_[pos], edge_strain_at(z, s, pos)).f;
       },
       [&](int64_t s, int64_t pos) {
-        z[L.moment() + s] = m_.bend[s & 1].stop(anc_t_[pos], triple_curvature_at(z, s, pos)).f;
+        z[c.force_index(1, s)] = m_.bend[s & 1].stop(anc_t_[pos], triple_curvature_at(z, s, pos)).f;
       },
       [&](int64_t s, int64_t pos) {
-        z[L.shear() + s] = m_.shear.stop(anc_s_[pos], shear_strain_at(z, s, pos)).f;
+        z[c.force_index(2, s)] = m_.shear.stop(anc_s_[pos], shear_strain_at(z, s, pos)).f;
       });
 }
 
@@ -79,21 +79,21 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z, const int3
   if (axes_stale_) freeze_bend_axes(c_.x1.data(), c_.slots());  // the strains read the axes
   anchors_stale_ = false;
   settled_ = false;  // new anchors: the kept stops are not theirs
-  const Layout& L = c_.layout;
-  const int64_t fo = L.tension();
+  const Cloth& c = c_;
   for_edges([&](int64_t s, int64_t pos) {
     const Band& b = m_.stretch[s & 1];
-    anc_e_[pos] = b.reversal() > 0 ? b.anchor(z[fo + s], edge_strain_at(x1, s, pos, slot)) : z[fo + s];
+    const double f = z[c.force_index(0, s)];
+    anc_e_[pos] = b.reversal() > 0 ? b.anchor(f, edge_strain_at(x1, s, pos, slot)) : f;
   });
   for_triples([&](int64_t s, int64_t pos) {
     const Band& b = m_.bend[s & 1];
-    const int64_t k = L.moment() - fo + s;
-    anc_t_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], triple_curvature_at(x1, s, pos, slot)) : z[fo + k];
+    const double f = z[c.force_index(1, s)];
+    anc_t_[pos] = b.reversal() > 0 ? b.anchor(f, triple_curvature_at(x1, s, pos, slot)) : f;
   });
   for_shears([&](int64_t s, int64_t pos) {
     const Band& b = m_.shear;
-    const int64_t k = L.shear() - fo + s;
-    anc_s_[pos] = b.reversal() > 0 ? b.anchor(z[fo + k], shear_strain_at(x1, s, pos, slot)) : z[fo + k];
+    const double f = z[c.force_index(2, s)];
+    anc_s_[pos] = b.reversal() > 0 ? b.anchor(f, shear_strain_at(x1, s, pos, slot)) : f;
   });
 }
 

@@ -84,7 +84,7 @@ void TimeLoop::map_history_halo() {
 }
 
 void TimeLoop::refresh_ghosts(bool history) {
-  halo_.exchange(c_.z.data(), Halo::kAll);
+  halo_.exchange(c_.z.data(), Halo::kAll, c_.layout, c_.slots());
   ev_.interpolate_hanging(c_.z.data());
   if (!history) return;
   for (std::vector<double>* x : {&c_.x1, &c_.x2}) {
@@ -237,7 +237,7 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
   // The ring's step-start forces, which its anchors read, from their owners:
   // settled_cost computes the ring's forces itself, so after a migration a
   // new ghost's would otherwise be stale.
-  halo_.exchange(c_.z.data(), Halo::kForces);
+  halo_.exchange(c_.z.data(), Halo::kForces, c_.layout, c_.slots());
   exchange_history(c_.x1.data());                     // the ring's bend axes read the ghosts' x1
   ev_.interpolate_hanging(c_.x1.data(), c_.slots());  // ... and hanging ones whose ends were ghosts
   freeze_bend_axes();

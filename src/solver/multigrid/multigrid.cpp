@@ -60,7 +60,7 @@ void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, in
   a0_ = &A0;
   // The levels' points and transfers follow the particles alone: a new
   // pattern of K (self-contact's pairs) keeps them and rebuilds the products.
-  const bool relevel = !levels_built_ || ni != ni_ || nj != nj_ || ids != levels_[0].ids;
+  const bool relevel = levels_.empty() || ni != ni_ || nj != nj_ || ids != levels_[0].ids;
   const bool fresh = relevel || stamp != stamp_ || stamp == 0 || A0.rows != rows_;
   if (relevel) build_levels(ids, ni, nj);
   else if (fresh) forget();  // a new pattern's smoothers start cold, as new levels' do

@@ -73,7 +73,7 @@ class Multigrid {
   void set_settings(const MultigridSettings& s) {
     s_ = s;
     stamp_ = 0;
-    levels_built_ = false;
+    levels_.clear();
   }
   // Levels for A0, whose row r is grid particle ids[r] of an ni x nj grid.
   // The point sets and transfers are rebuilt when `ids` or the grid change,
