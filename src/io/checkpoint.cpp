@@ -203,6 +203,7 @@ void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, co
   Handle g = w.group(root, "state");
   const int ni = c.grid.ni, nj = c.grid.nj;
   const Selection s1 = select_blocks(owned, ni, nj, 1);
+  const Selection s2 = select_blocks(owned, ni, nj, 2);
   const Selection s3 = select_blocks(owned, ni, nj, 3);
   const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c8 = H5T_NATIVE_UINT8;
   w.dataset(g.get(), "positions", f64, d, c.x(), s3);
