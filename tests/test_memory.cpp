@@ -212,9 +212,10 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
 // triples and a cell a particle, a little less at the borders): the element
 // buffers an edge's one entry (3 doubles: its ends' are each other's
 // negatives), a triple's and a cell's one number (times the kept
-// gradients), 9 doubles; the kept numbers an edge's 7 (its 1/|e| computed
-// again), a triple's 7 (kept_bend), a cell's 13 and a particle's 5 (its
-// mass term computed again), 46 doubles. K's frozen
+// gradients), 9 doubles; the kept numbers an edge's 2 (its frozen tension
+// and slope: its direction and length computed from z again), a triple's 7
+// (kept_bend) and a cell's 13, 31 doubles (a particle's contact terms
+// computed again, none kept). K's frozen
 // slopes and tensions, which the kept numbers carry, are held only by an
 // evaluator that does not keep them; a nonlinear CG run holds neither.
 // Both ends' entries of an edge, a triple's or a cell's contributions to
@@ -231,25 +232,25 @@ TEST(Memory, ElementBuffersAndKeptNumbersHoldNoMore) {
   w.loop->evaluator().memory(t);
   const double per = 1.0 / double(w.cloth.grid.n());
   const double buffers = double(row_bytes(t, "Evaluator: element buffers (edges, triples, cells)")) * per;
-  const double kept = double(row_bytes(t, "Evaluator: products' kept numbers (elements, contact)")) * per;
+  const double kept = double(row_bytes(t, "Evaluator: products' kept numbers (elements)")) * per;
   std::printf("element buffers %.1f, kept numbers %.1f bytes a particle\n", buffers, kept);
   EXPECT_GT(buffers, 0.95 * 9 * 8);
   EXPECT_LE(buffers, 9 * 8);
-  EXPECT_GT(kept, 0.95 * 46 * 8);
-  EXPECT_LE(kept, 46 * 8);
+  EXPECT_GT(kept, 0.95 * 31 * 8);
+  EXPECT_LE(kept, 31 * 8);
   const std::string frozen = "Evaluator: K's frozen slopes and tensions";
   EXPECT_EQ(row_bytes(t, frozen), 0u);
   w.loop->evaluator().keep_products(false);
   MemoryTable off;
   w.loop->evaluator().memory(off);
   EXPECT_GT(double(row_bytes(off, frozen)) * per, 0.95 * 7 * 8) << "not keeping, the products read them";
-  EXPECT_EQ(row_bytes(off, "Evaluator: products' kept numbers (elements, contact)"), 0u);
+  EXPECT_EQ(row_bytes(off, "Evaluator: products' kept numbers (elements)"), 0u);
   s.solver.method = SolverMethod::Cg;
   Simulation cg(s, test_fabric());
   cg.step();
   MemoryTable c;
   cg.loop->evaluator().memory(c);
-  EXPECT_EQ(row_bytes(c, "Evaluator: products' kept numbers (elements, contact)"), 0u) << "nonlinear CG";
+  EXPECT_EQ(row_bytes(c, "Evaluator: products' kept numbers (elements)"), 0u) << "nonlinear CG";
   EXPECT_EQ(row_bytes(c, frozen), 0u) << "nonlinear CG";
 }
 

@@ -2,7 +2,7 @@
 // free particles, for the multigrid preconditioner. Built row by row from
 // each particle's gather row (the product's fixed order), so any thread
 // count gives the same matrix. The blocks come from the numbers the
-// diagonal kept (the products read the same): an edge's
+// diagonal kept and z (the products read the same): an edge's
 //   B = w (T/L (I - u u^T) + slope/L0 u u^T)   (+B on its ends, -B across),
 // a triple's or cell's factor g_a g_b^T, a particle's mass coefficient and
 // contact normal term. Hanging particles fold onto their ends by their
@@ -106,8 +106,10 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(column(hx_[e].row), w * hx_[e].w, blk);
     // fixed, or (one rank's columns) another rank's: no unknown of this rank behind it
   };
-  auto one = [&](int64_t p, int64_t pos, const GatherRow& g, const double* kc, double mass, double w) {
+  auto one = [&](int64_t p, int64_t pos, const GatherRow& g, double mass, double w) {
     double blk[9] = {mass, 0, 0, 0, mass, 0, 0, 0, mass};
+    double kc[kKc];
+    contact_terms(p, k_z_, kc);
     if (kc[3] > 0) {  // contact: slope n n^T, n the force's direction
       const double s = kc[4] / (kc[3] * kc[3]);
       for (int i = 0; i < 3; ++i)
@@ -121,12 +123,12 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       for (int k = 0; k < 2; ++k)
         if (at[k] >= 0) {
           const int64_t pos = at[k] / kEdgeEntry, part = k;  // place 0: its first end
-          const double* ke = &kg_e_[kKgEdge * pos];
           const int64_t s = slot_at(lists_.edges, lists_.ring_edges, pos);
           const int64_t ends[2] = {s >> 1, nb_e_[pos]};
-          const double iv = 1.0 / ke[3];
-          const double u[3] = {ke[0] * iv, ke[1] * iv, ke[2] * iv};
-          const double a = ke[6] * ke[4] * iv, b = ke[6] * ke[5] - a;
+          const EdgeStiffness ke = edge_stiffness_at(s, pos, k_z_);
+          const double iv = 1.0 / ke.length;
+          const double u[3] = {ke.e.x * iv, ke.e.y * iv, ke.e.z * iv};
+          const double a = ke.width * ke.tension * iv, b = ke.width * ke.slope_per_rest - a;
           double B[9];
           for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) B[3 * i + j] = (i == j ? a : 0.0) + b * u[i] * u[j];
@@ -156,10 +158,10 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       }
   };
   const int64_t p = lists_.particles.items[r];
-  one(p, r, rows_[r], &kc_[kKc * r], c_.mass[p] * m_.inertia_coeff(), 1.0);
+  one(p, r, rows_[r], c_.mass[p] * m_.inertia_coeff(), 1.0);
   for (int64_t e = ht_start_[r]; e < ht_start_[r + 1]; ++e) {
     const size_t k = size_t(ht_[e].row);
-    one(lists_.hanging[k].h, -1, hanging_row(k), &kc_[kKc * (np + k)], 0.0, ht_[e].w);  // no mass at h
+    one(lists_.hanging[k].h, -1, hanging_row(k), 0.0, ht_[e].w);  // no mass at h
   }
 }
 

@@ -67,7 +67,7 @@ int64_t Evaluator::kink_tangents() {
   const int64_t ne = lists_.edges.size() + lists_.ring_edges.size();
   for (int64_t pos = 0; pos < ne; ++pos)
     if (active_.secant(0, pos, &s)) {
-      kg_e_[kKgEdge * pos + 5] = s / rest_e_[pos];
+      kg_e_[kKgEdge * pos + 1] = s / rest_e_[pos];
       ++changed;
     }
   const int64_t nt = lists_.triples.size() + lists_.ring_triples.size();

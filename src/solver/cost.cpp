@@ -106,7 +106,7 @@ void Evaluator::fit_arrays(bool exact) {
   each(cost_s_, ns, 1, ms, 0.0);
   if (slopes_) fit_slopes(exact);
   if (!stiffness_) {  // a nonlinear CG run's: no stiffness numbers at all
-    for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_, &k_tension_, &k_slope_e_, &k_slope_t_, &k_slope_s_})
+    for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &k_tension_, &k_slope_e_, &k_slope_t_, &k_slope_s_})
       std::vector<double>().swap(*a);
   } else if (!keep_) {  // keeping, the kept numbers carry them
     each(k_tension_, ne, 1, me, 0.0);
@@ -117,7 +117,6 @@ void Evaluator::fit_arrays(bool exact) {
     each(kg_e_, ne, kKgEdge, me, 0.0);
     each(kg_t_, nt, kKgTriple, mt, 0.0);
     each(kg_s_, ns, kKgCell, ms, 0.0);
-    each(kc_, nr, kKc, n, 0.0);
     for (auto* a : {&k_tension_, &k_slope_e_, &k_slope_t_, &k_slope_s_}) std::vector<double>().swap(*a);
   }
   each(rows_, nr, 1, n, GatherRow{});
@@ -160,7 +159,7 @@ void Evaluator::fit_to_lists(bool exact) {
 }
 
 void Evaluator::keep_products(bool on) {
-  for (auto* a : {&kg_e_, &kg_t_, &kg_s_, &kc_}) std::vector<double>().swap(*a);  // off: no memory
+  for (auto* a : {&kg_e_, &kg_t_, &kg_s_}) std::vector<double>().swap(*a);  // off: no memory
   keep_wanted_ = on;
   keep_ = on && stiffness_;
   fit_to_lists(true);  // the frozen slopes' arrays follow (off: held); may move the rows: listed again at the next call
@@ -189,7 +188,7 @@ void Evaluator::memory(MemoryTable& t) const {
     return b;
   };
   t.add(o, "element buffers (edges, triples, cells)", sum({&buf_e_, &buf_t_, &buf_s_}));
-  t.add(o, "products' kept numbers (elements, contact)", sum({&kg_e_, &kg_t_, &kg_s_, &kc_}));
+  t.add(o, "products' kept numbers (elements)", sum({&kg_e_, &kg_t_, &kg_s_}));
   t.add(o, "particles' Newton costs", cost_p_);
   t.add(o, "band costs, slopes, force derivatives",
         sum({&cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));
@@ -575,7 +574,7 @@ void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const 
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
   active_.note(0, pos, L / L0 - 1.0, bv, st);
   const double f = settle ? (settle[c_.force_index(0, s)] = st.f) : z[c_.force_index(0, s)];
-  if (settle && keep_) edge_kept(z + 3 * p, z + 3 * q, L, std::max(0.0, st.f), st.df_dq / L0, w, &kg_e_[kKgEdge * pos]);
+  if (settle && keep_) edge_kept(std::max(0.0, st.f), st.df_dq / L0, &kg_e_[kKgEdge * pos]);
   put(&buf_e_[kEdgeEntry * pos], g[1], f * w);
   const BandExcess ex = m_.use_stretch ? Band::excess(f, bv) : BandExcess{};
   const double lam = w / m_.force_scale;
@@ -604,8 +603,7 @@ void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], con
     const int64_t t = c_.force_index(0, s[l]);
     f[l] = settle ? (settle[t] = stl.f) : z[t];
     if (settle && keep_)
-      edge_kept(z + 3 * (s[l] >> 1), z + 3 * int64_t(nb_e_[pos + l]), L[l], std::max(0.0, stl.f), stl.df_dq / L0[l],
-                w[l], &kg_e_[kKgEdge * (pos + l)]);
+      edge_kept(std::max(0.0, stl.f), stl.df_dq / L0[l], &kg_e_[kKgEdge * (pos + l)]);
     put(&buf_e_[kEdgeEntry * (pos + l)], g[l][1], f[l] * w[l]);
   }
   const bool slopes = !gq_e_.empty();  // a gradient's slopes (evaluate with one)

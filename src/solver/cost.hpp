@@ -19,6 +19,7 @@
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
 #include "solver/band_active_set.hpp"
+#include "solver/elements/edge_K.hpp"
 #include "solver/elements/kept_K.hpp"
 #include "solver/elements/v3.hpp"
 #include "solver/halo.hpp"
@@ -311,8 +312,10 @@ class Evaluator {
   void fit_slopes(bool exact);
   bool slopes_ = false;  // the gradient's slopes are held (size_slopes)
   // An element's stiffness numbers at z (edge_kept's, kept_gradients'),
-  // its band stop computed here; its frozen tension and slope recorded.
-  void edge_numbers(int64_t s, int64_t pos, const double* z, double* ke);
+  // its band stop computed here; its frozen tension and slope recorded
+  // (an edge's kept, or in K's frozen slopes and tensions: edge_stiffness_at
+  // reads them back).
+  void edge_numbers(int64_t s, int64_t pos, const double* z);
   void triple_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   void shear_numbers(int64_t s, int64_t pos, const double* z, double* kg);
   // The Newton residual's coefficients of the step (each a division),
@@ -550,15 +553,16 @@ class Evaluator {
   std::vector<double> rho_grid_;                  // the same at z's indices, ghosts too (gradients only)
   std::vector<double> k_slope_e_, k_slope_t_, k_slope_s_;  // K's frozen band slopes, list order (not keeping)
   std::vector<double> k_tension_;                 // and edge tensions
-  // stiffness_product's z-only numbers (keep_products), the elements' by
-  // list position, the particles' by row (rows_): edges (edge_kept), triples
-  // (kept_bend: slope factor, two gradients) and cells (slope factor, then
-  // the gradient, 4 x 3) and contact (force, size, slope). Kept by
-  // settled_cost (elements) and
-  // the diagonal after it (particles), or all by a diagonal at a z no
-  // settled_cost saw (or, after a list change, by the next product);
-  // kg_ready_ while they are all the linear solve's z's.
-  static constexpr int kKgEdge = 7, kKgTriple = kKeptBend, kKgCell = 13, kKc = 5;
+  // stiffness_product's numbers kept (keep_products) by list position:
+  // edges (edge_kept: the frozen tension and slope alone, the geometry read
+  // from z again), triples (kept_bend: slope factor, two gradients) and
+  // cells (slope factor, then the gradient, 4 x 3). What is cheaper to read
+  // from z than from memory is computed by each product: an edge's
+  // direction and length, a particle's contact (kKc: force, size, slope).
+  // Kept by settled_cost, or by a diagonal at a z no settled_cost saw (or,
+  // after a list change, by the next product); kg_ready_ while they are the
+  // linear solve's z's.
+  static constexpr int kKgEdge = 2, kKgTriple = kKeptBend, kKgCell = 13, kKc = 5;
   // settled_cost keeps the elements' numbers (settled_, until another
   // evaluation, new anchors or a list change): they are its band stops and gradients, so
   // stiffness_diagonal at the same z reads them instead of computing the
@@ -568,12 +572,30 @@ class Evaluator {
   bool stiffness_ = true;    // hold_stiffness
   bool kg_ready_ = false;
   bool settled_ = false;
-  std::vector<double> kg_e_, kg_t_, kg_s_, kc_;
-  // An edge's numbers into ke, from its ends' positions and length (as
-  // edge_length computes it: the cost pass hands over its own), its frozen
-  // tension, slope / rest length and width.
-  static void edge_kept(const double* za, const double* zb, double length, double tension, double slope_per_rest,
-                        double width, double* ke);
+  std::vector<double> kg_e_, kg_t_, kg_s_;
+  // An edge's kept numbers into ke: its frozen tension and slope / rest
+  // length. Its direction and length are z's, its width the rest
+  // geometry's: computed or read where used (edge_stiffness_at), not held.
+  static void edge_kept(double tension, double slope_per_rest, double* ke) {
+    ke[0] = tension;
+    ke[1] = slope_per_rest;
+  }
+  // An edge's stiffness numbers at z (edge_K.hpp): its ends' positions with
+  // the frozen tension and slope (kept, or K's frozen slopes and tensions).
+  EdgeStiffness edge_stiffness_at(int64_t s, int64_t pos, const double* z) const {
+    const EdgeStiffness f = edge_frozen(pos);
+    const int64_t p = s >> 1, q = nb_e_[size_t(pos)];
+    return edge_stiffness(load3<double>(z + 3 * p), load3<double>(z + 3 * q), f.tension, f.slope_per_rest, f.width);
+  }
+  // Its frozen tension and slope / rest length and its width alone.
+  EdgeStiffness edge_frozen(int64_t pos) const {
+    const size_t i = size_t(pos);
+    const double tension = keep_ ? kg_e_[kKgEdge * i] : k_tension_[i];
+    const double slope = keep_ ? kg_e_[kKgEdge * i + 1] : k_slope_e_[i] / rest_e_[i];
+    return {{0, 0, 0}, 0, tension, slope, width_e_[i]};
+  }
+  // stiffness_product's edges: each one's contribution to its second end.
+  void edge_products(const ItemRun& run, const double* z, const double* v);
   // A cell's: the slope factor, then the n gradients (a triple's: kept_bend).
   template <class V>
   static void kept_gradients(double factor, const V* g, int n, double* kg) {
@@ -585,7 +607,7 @@ class Evaluator {
     }
   }
   // A particle's contact numbers into kc (see kKc), at z.
-  void contact_kept(int64_t p, const double* z, double* kc) const;
+  void contact_terms(int64_t p, const double* z, double* kc) const;
   // Friction's block (contact.hpp) times v_p into out: computed, not kept
   // (x1 and z give it); assemble_stiffness reads it at k_z_, the z of the
   // last stiffness_diagonal.

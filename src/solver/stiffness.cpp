@@ -97,23 +97,10 @@ void Evaluator::hysteresis_anchors(const double* x1, const double* z, const int3
   });
 }
 
-// An edge's z-only numbers for stiffness_product, as edge_length on duals
-// computes their value parts: e = b - a, |e| (1/|e| and e/|e| are one
-// division and a product away); then its frozen tension, slope / rest
-// length and width.
-void Evaluator::edge_kept(const double* za, const double* zb, double length, double tension, double slope_per_rest,
-                          double width, double* ke) {
-  put(ke, load3<double>(zb) - load3<double>(za));
-  ke[3] = length;
-  ke[4] = tension;
-  ke[5] = slope_per_rest;
-  ke[6] = width;
-}
-
 // What stiffness_product needs of a particle: its contact force, the force's
 // size (0 where it does not touch) and slope. Its mass term's coefficient,
 // mass times Model::inertia_coeff, is computed where read.
-void Evaluator::contact_kept(int64_t p, const double* z, double* kc) const {
+void Evaluator::contact_terms(int64_t p, const double* z, double* kc) const {
   double slope = 0;
   const bool touching = contact_force(m_.contact, z + 3 * p, kc, nullptr, nullptr, &slope);
   kc[3] = touching ? std::sqrt(kc[0] * kc[0] + kc[1] * kc[1] + kc[2] * kc[2]) : 0.0;
@@ -135,31 +122,17 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   if (pairs_missing_ > 0) throw std::logic_error("Evaluator: a self-contact partner has no index in the own numbering");
   halo_.exchange_at(v, halo_send_.data(), halo_recv_.data());
   interpolate_hanging_local(v);  // K acts on P v: hanging entries follow their ends
-  // What depends on z alone (edges' lengths and directions, triples' and
-  // cells' strain gradients and slope factors, particles' contact terms):
-  // kept by the diagonal (from settled_cost's pass in Newton's order), or
-  // by a first product after a list change; the products read it back, bit
-  // for bit the same numbers. Not keeping, every product computes it.
+  // What depends on z alone (triples' and cells' strain gradients and slope
+  // factors, edges' frozen tensions and slopes): kept by the diagonal (from
+  // settled_cost's pass in Newton's order), or by a first product after a
+  // list change; the products read it back, bit for bit the same numbers.
+  // Not keeping, every product computes it. Edges' directions and lengths
+  // and the particles' contact terms every product computes.
   // Keeping, the frozen slopes live in the kept numbers only: a product
   // needs the diagonal's first (Newton's order).
   if (keep_ && !kg_ready_) throw std::logic_error("Evaluator::stiffness_product: needs stiffness_diagonal first");
   const bool fill = !keep_;
-  // Not keeping, an edge's numbers computed anew: out of line, so that the
-  // kept path's few operations inline into the pass's loop.
-  const auto edge_anew = [&](int64_t s, int64_t pos, double* ke) __attribute__((noinline)) {
-    const int64_t p = s >> 1, q = nb_e_[pos];
-    const V e = at(z, q) - at(z, p);
-    edge_kept(z + 3 * p, z + 3 * q, std::sqrt(dot(e, e)), k_tension_[pos], k_slope_e_[pos] / rest_e_[pos],
-              width_e_[pos], ke);
-  };
-  auto edge = [&](int64_t s, int64_t pos) {
-    double mine[kKgEdge];
-    double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
-    if (fill) edge_anew(s, pos, ke);
-    V out[2];
-    edge_product(ke, at(v, lo_e_[2 * pos + 1]) - at(v, lo_e_[2 * pos]), out);
-    put(&buf_e_[kEdgeEntry * pos], out[1]);  // out[0] is -out[1]
-  };
+  auto edge = [&](const ItemRun& run) { edge_products(run, z, v); };
   // The grid ids (z's) only where the z-only numbers are computed: the
   // operand's reads go through the own numbering's tables.
   auto triple = [&](int64_t s, int64_t pos) {
@@ -204,17 +177,13 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], out[k]);
   };
   // A particle's contact force, its size and slope (size 0 where it does
-  // not touch), and its mass term's coefficient; kept by row (rows_), so
-  // that a coarse mesh's particles find theirs on consecutive lines.
-  auto contact_at = [&](int64_t p, size_t row, double* mine) -> const double* {
-    double* kc = keep_ ? &kc_[kKc * row] : mine;
-    if (fill) contact_kept(p, z, kc);
-    return kc;
-  };
+  // not touch), and its mass term's coefficient: computed from z in each
+  // product (most particles are past the obstacle's layer: a few
+  // comparisons), not kept.
   const double inertia = m_.inertia_coeff();
   auto particle = [&](int64_t p, int64_t pos) {
-    double mine[kKc];
-    const double* fc = contact_at(p, size_t(pos), mine);
+    double fc[kKc];
+    contact_terms(p, z, fc);
     const double fn = fc[3], slope = fc[4], mass = c_.mass[p] * inertia;
     const double* vp = v + 3 * pos;  // the free particles come first, in list order
     double out[3];
@@ -231,8 +200,8 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends_local(kv, [&](int64_t h, int64_t lh, const GatherRow& row, double* out) {  // P^T K P: no mass at h
-    double mine[kKc];
-    const double* fc = contact_at(h, size_t(&row - rows_.data()), mine);
+    double fc[kKc];
+    contact_terms(h, z, fc);
     const double fn = fc[3], slope = fc[4];
     const double* vh = v + 3 * lh;
     const double nv = fn > 0 ? (fc[0] * vh[0] + fc[1] * vh[1] + fc[2] * vh[2]) / fn : 0.0;
@@ -243,15 +212,55 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   kg_ready_ = true;
 }
 
-void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z, double* ke) {
+// An edge's direction and length come from z in every product, keeping or
+// not: reading z's positions moves fewer bytes than keeping 4 numbers an
+// edge, and its square root is the cost pass's (the same bits). Four edges
+// in the lanes: one square root and three divisions for four.
+void Evaluator::edge_products(const ItemRun& run, const double* z, const double* v) {
+  auto ends_moves = [&](int64_t pos) { return at(v, lo_e_[2 * pos + 1]) - at(v, lo_e_[2 * pos]); };
+  in_fours(
+      run,
+      [&](int64_t k) {
+#if DRAPE_LANES
+        const int64_t pos = run.base + k;
+        V a[4], b[4], ed[4];
+        double tension[4], slope[4];
+        for (int l = 0; l < 4; ++l) {
+          const EdgeStiffness ks = edge_frozen(pos + l);
+          a[l] = at(z, run.items[k + l] >> 1);
+          b[l] = at(z, nb_e_[pos + l]);
+          ed[l] = ends_moves(pos + l);
+          tension[l] = ks.tension;
+          slope[l] = ks.slope_per_rest;
+        }
+        const V4 e = lanes4(b) - lanes4(a);
+        const V4 out = edge_product(e, sqrt4(dot(e, e)), loadu4(tension), loadu4(slope), loadu4(&width_e_[pos]),
+                                    lanes4(ed));
+        for (int l = 0; l < 4; ++l) put(&buf_e_[kEdgeEntry * (pos + l)], lane(out, l));  // a's: its negative
+#else
+        for (int l = 0; l < 4; ++l) {
+          const int64_t pos = run.base + k + l;
+          put(&buf_e_[kEdgeEntry * pos], edge_product(edge_stiffness_at(run.items[k + l], pos, z), ends_moves(pos)));
+        }
+#endif
+      },
+      [&](int64_t k) {
+        const int64_t pos = run.base + k;
+        put(&buf_e_[kEdgeEntry * pos], edge_product(edge_stiffness_at(run.items[k], pos, z), ends_moves(pos)));
+      });
+}
+
+void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z) {
   const int64_t p = s >> 1, q = nb_e_[pos];
   V g[2];
   const double len = edge_length(at(z, p), at(z, q), g);
   const double L0 = rest_e_[pos];
   const Band::Stop st = m_.stretch[s & 1].stop(anc_e_[pos], len / L0 - 1);
   const double tension = std::max(0.0, st.f);
-  if (!keep_) k_tension_[pos] = tension, k_slope_e_[pos] = st.df_dq;  // the products' (keeping: ke's)
-  edge_kept(z + 3 * p, z + 3 * q, len, tension, st.df_dq / L0, width_e_[pos], ke);
+  if (keep_)
+    edge_kept(tension, st.df_dq / L0, &kg_e_[kKgEdge * pos]);
+  else
+    k_tension_[pos] = tension, k_slope_e_[pos] = st.df_dq;
 }
 
 void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* kg) {
@@ -281,9 +290,9 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
 // diagonal, in the first entry of the particle's buffer entry, gathered.
 // The elements' numbers are those settled_cost kept when it ran at this z
 // (Newton's order: their strains, bands and angles are not computed a third
-// time), else computed here; either way they and the particles' contact
-// numbers stay kept (keep_products), so that no product computes anything
-// but itself.
+// time), else computed here; either way they stay kept (keep_products), so
+// that a product computes only what is cheaper than reading it back (an
+// edge's direction and length, a particle's contact).
 void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   hold_stiffness(true);
   list_rows();
@@ -298,10 +307,8 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   k_z_ = z;
   const bool settled = settled_;
   auto edge = [&](int64_t s, int64_t pos) {
-    double mine[kKgEdge];
-    double* ke = keep_ ? &kg_e_[kKgEdge * pos] : mine;
-    if (!settled) edge_numbers(s, pos, z, ke);
-    buf_e_[kEdgeEntry * pos] = edge_diagonal(ke);  // both ends'
+    if (!settled) edge_numbers(s, pos, z);
+    buf_e_[kEdgeEntry * pos] = edge_diagonal(edge_stiffness_at(s, pos, z));  // both ends'
   };
   auto gradients = [](const double* kg, double* buf, int n) {
     for (int k = 0; k < n; ++k) buf[3 * k] = kept_gradient_diagonal(kg, k);
@@ -321,15 +328,10 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     if (!settled) shear_numbers(s, pos, z, kg);
     if (!narrow_) gradients(kg, &buf_s_[kShearSlot * pos], 4);
   };
-  auto contact_at = [&](int64_t p, size_t row, double* mine) -> const double* {
-    double* kc = keep_ ? &kc_[kKc * row] : mine;
-    contact_kept(p, z, kc);
-    return kc;
-  };
   const double inertia = m_.inertia_coeff();
   auto particle = [&](int64_t p, int64_t pos) {
-    double mine[kKc];
-    const double* kc = contact_at(p, size_t(pos), mine);
+    double kc[kKc];
+    contact_terms(p, z, kc);
     double dsum = c_.mass[p] * inertia + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
@@ -338,8 +340,8 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   };
   elements_then_particles(edge, triple, shear, [] {}, particle);
   hanging_into_ends_local(diag, [&](int64_t h, int64_t, const GatherRow& row, double* out) {
-    double mine[kKc];
-    const double* kc = contact_at(h, size_t(&row - rows_.data()), mine);
+    double kc[kKc];
+    contact_terms(h, z, kc);
     double dsum = kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * h, c_.x1_at(h)) / 3;
     gather_diagonal(row, dsum);

@@ -70,18 +70,21 @@ inline KernelBytes cost_gradient_bytes() {
   return {c.edge + edge, c.triple + triple, c.cell + cell, c.particle + particle, 8 * kD};
 }
 
-// stiffness_product with its z-only numbers kept (kg_e_, kg_t_, kg_s_, kc_)
-// and wide buffers (BM_Kernels' evaluator, which took a gradient first):
-// each element's particles' local indices (lo_e_, lo_t_, lo_s_), not the
-// neighbours' grid ids.
+// stiffness_product with its numbers kept (kg_e_, kg_t_, kg_s_) and wide
+// buffers (BM_Kernels' evaluator, which took a gradient first): each
+// element's particles' local indices (lo_e_, lo_t_, lo_s_); an edge's ends'
+// grid ids and positions too (its direction and length are computed), and
+// each particle's position (its contact terms).
 inline KernelBytes product_bytes() {
   using namespace traffic;
-  const double edge = kI64 + 2 * kI32 + 7 * kD + kEdgeBuf + kEdgeBuf;
+  // item, local indices and neighbour, frozen tension and slope, width;
+  // buffer out; gathered once.
+  const double edge = kI64 + 2 * kI32 + kI32 + 2 * kD + kD + kEdgeBuf + kEdgeBuf;
   const double triple = kI64 + 3 * kI32 + 7 * kD + kTripleBuf + kTripleBuf;
   const double cell = kI64 + 4 * kI32 + 13 * kD + kCellBuf + kCellBuf;
-  // item, row, contact numbers and mass, operand; result out; the operand
-  // once per element pass.
-  const double particle = kI64 + 64 + 5 * kD + kD + 3 * kD + 3 * kD + 3 * 3 * kD;
+  // item, row, mass, operand; result out; the operand once per element
+  // pass; positions read by the edges' pass and this one.
+  const double particle = kI64 + 64 + kD + 3 * kD + 3 * kD + 3 * 3 * kD + 2 * 3 * kD;
   return {edge, triple, cell, particle, 0};
 }
 

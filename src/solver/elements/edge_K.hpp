@@ -66,35 +66,45 @@ inline void edge_length_hv_four(const EdgeFour& e, const V3<double> v[4], V3<dou
 #endif
 }
 
-// The edge's kept numbers for Newton's stiffness (Evaluator::edge_kept
-// writes them): e = b - a (3), |e|, the frozen tension, the band slope over
-// the rest length, the width. 1/|e| is computed again, the same division
-// (edge_length's): one number fewer held.
-// Its K v contributions to a and b, for the ends' moves' difference
-// ed = v_b - v_a: edge_length on duals at (z, v), its eps parts written out
-// in the same operations with the value parts kept, so bit for bit its
-// numbers: tension times the direction's change plus the band's stiffness
-// times the length's change along the direction.
-inline void edge_product(const double* ke, const V3<double>& ed, V3<double> out[2]) {
-  using V = V3<double>;
-  const V e{ke[0], ke[1], ke[2]};
-  const double Lv = ke[3], iv = 1.0 / Lv;
-  const V u = iv * e;
-  const double dd = (ed.x * e.x + e.x * ed.x) + (ed.y * e.y + e.y * ed.y) + (ed.z * e.z + e.z * ed.z);
-  const double Ld = dd / (2 * Lv);
-  const double invd = (0.0 * Lv - 1.0 * Ld) / (Lv * Lv);
-  const V ud{invd * e.x + iv * ed.x, invd * e.y + iv * ed.y, invd * e.z + iv * ed.z};
-  const V dg[2] = {{0.0 * u.x + -1.0 * ud.x, 0.0 * u.y + -1.0 * ud.y, 0.0 * u.z + -1.0 * ud.z}, ud};
-  const V vg[2] = {-1.0 * u, u};
-  const double w = ke[6], tension = ke[4], stiff = ke[5] * Ld;
-  for (int k = 0; k < 2; ++k) out[k] = w * (tension * dg[k] + stiff * vg[k]);
+// An edge's numbers for Newton's stiffness: e = b - a and |e| from the
+// ends' positions (edge_length's operations, so its bits: recomputed by each
+// product, cheaper than reading them back), then the frozen tension, the
+// band slope over the rest length (kept) and the width (rest geometry).
+struct EdgeStiffness {
+  V3<double> e;
+  double length, tension, slope_per_rest, width;
+};
+inline EdgeStiffness edge_stiffness(const V3<double>& a, const V3<double>& b, double tension, double slope_per_rest,
+                                    double width) {
+  const V3<double> e = b - a;
+  return {e, root(dot(e, e)), tension, slope_per_rest, width};
 }
 
-// The diagonal of the edge's K block at either end (the same at both),
-// from its kept numbers.
-inline double edge_diagonal(const double* ke) {
-  const V3<double> u = (1.0 / ke[3]) * V3<double>{ke[0], ke[1], ke[2]};  // dk/dx = -u, u: the same |.|^2
-  return ke[6] * (ke[4] / ke[3] + ke[5] * dot(u, u) / 3);
+// Its K v contribution to b (a's is its negative), for the ends' moves'
+// difference ed = v_b - v_a: edge_length on duals at (z, v), its eps parts
+// written out in the same operations with the value parts kept, so bit for
+// bit its numbers: tension times the direction's change plus the band's
+// stiffness times the length's change along the direction. T: double, or
+// D4 (four edges, one in each lane).
+template <class T>
+inline V3<T> edge_product(const V3<T>& e, T Lv, T tension, T slope_per_rest, T w, const V3<T>& ed) {
+  const T iv = num<T>(1.0) / Lv;
+  const V3<T> u = iv * e;
+  const T dd = (ed.x * e.x + e.x * ed.x) + (ed.y * e.y + e.y * ed.y) + (ed.z * e.z + e.z * ed.z);
+  const T Ld = dd / (num<T>(2.0) * Lv);
+  const T invd = (num<T>(0.0) * Lv - num<T>(1.0) * Ld) / (Lv * Lv);
+  const V3<T> ud{invd * e.x + iv * ed.x, invd * e.y + iv * ed.y, invd * e.z + iv * ed.z};
+  const T stiff = slope_per_rest * Ld;
+  return w * (tension * ud + stiff * u);
+}
+inline V3<double> edge_product(const EdgeStiffness& k, const V3<double>& ed) {
+  return edge_product(k.e, k.length, k.tension, k.slope_per_rest, k.width, ed);
+}
+
+// The diagonal of the edge's K block at either end (the same at both).
+inline double edge_diagonal(const EdgeStiffness& k) {
+  const V3<double> u = (1.0 / k.length) * k.e;  // dk/dx = -u, u: the same |.|^2
+  return k.width * (k.tension / k.length + k.slope_per_rest * dot(u, u) / 3);
 }
 
 }  // namespace drape
