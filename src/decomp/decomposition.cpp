@@ -29,16 +29,7 @@ Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm,
 }
 
 void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d) {
-  if (!d.halo) return;
-  std::vector<int64_t> held = d.halo->ghost_ids();
-  for (int t : d.owned) {
-    const TileRange r = tiling.range(t);
-    for (int i = r.i0; i < r.i1; ++i)
-      for (int j = r.j0; j < r.j1; ++j) held.push_back(c.grid.id(i, j));
-  }
-  std::sort(held.begin(), held.end());
-  held.erase(std::unique(held.begin(), held.end()), held.end());
-  hold_particles(c, held);
+  if (d.halo) hold_with_tiles(c, d.halo->ghost_ids(), tiling, d.owned);
 }
 
 DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {

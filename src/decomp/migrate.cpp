@@ -34,16 +34,9 @@ void each_value(Cloth& c, const Tiling& tl, int t, F&& f) {
 // already (the rebalance narrows it to the new tiles and ghosts after).
 void hold_arriving(Cloth& c, const Tiling& tl, const std::map<int, std::vector<int>>& in) {
   if (c.slot_of.empty() || in.empty()) return;  // every particle held
-  std::vector<int64_t> held = held_particles(c);
-  for (const auto& [peer, tiles] : in)
-    for (int t : tiles) {
-      const TileRange r = tl.range(t);
-      for (int i = r.i0; i < r.i1; ++i)
-        for (int j = r.j0; j < r.j1; ++j) held.push_back(c.grid.id(i, j));
-    }
-  std::sort(held.begin(), held.end());
-  held.erase(std::unique(held.begin(), held.end()), held.end());
-  hold_particles(c, held);
+  std::vector<int> arriving;
+  for (const auto& [peer, tiles] : in) arriving.insert(arriving.end(), tiles.begin(), tiles.end());
+  hold_with_tiles(c, held_particles(c), tl, arriving);
 }
 
 int64_t tile_particles(const Tiling& tl, int t) {

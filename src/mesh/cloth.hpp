@@ -15,6 +15,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh/tiles.hpp"
+
 namespace drape {
 
 enum ParticleFlag : uint8_t {
@@ -150,5 +152,8 @@ inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(s
 void hold_particles(Cloth& c, const std::vector<int64_t>& held);
 // The particles c holds x1, x2 and forces for, ascending.
 std::vector<int64_t> held_particles(const Cloth& c);
+// hold_particles for `held` (any order, repeats allowed) and every particle
+// of the tiles `tiles` of `tl`.
+void hold_with_tiles(Cloth& c, std::vector<int64_t> held, const Tiling& tl, const std::vector<int>& tiles);
 
 }  // namespace drape

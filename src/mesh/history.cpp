@@ -66,3 +66,18 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
 }
 
 }  // namespace drape
+
+namespace drape {
+
+void hold_with_tiles(Cloth& c, std::vector<int64_t> held, const Tiling& tl, const std::vector<int>& tiles) {
+  for (int t : tiles) {
+    const TileRange r = tl.range(t);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) held.push_back(c.grid.id(i, j));
+  }
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  hold_particles(c, held);
+}
+
+}  // namespace drape
