@@ -16,6 +16,13 @@
 
 namespace drape {
 
+// Every rank's rows of a block matrix (global columns), concatenated in
+// rank order, into one matrix whose row g is the concatenation's row
+// from[g]: the ranks' rows whole, in one order, on every rank. Collective.
+// Returns the bytes this rank received (8 a row, 4 + 72 a block).
+int64_t gather_rows(const Reducer& red, const BlockMatrix& mine, const std::vector<int64_t>& rows_per_rank,
+                    const std::vector<int64_t>& from, BlockMatrix& all);
+
 class RankRows {
  public:
   // From this rank's free particles `mine` (its list order; `grid` particles
@@ -49,9 +56,8 @@ class RankRows {
   std::vector<int64_t> first_;       // per rank: its first row in the concatenation
   std::vector<int64_t> mine_;        // this rank's row -> global row
   std::vector<int32_t> column_of_;
-  std::vector<int64_t> blocks_, bytes_, len_, cat_start_;
-  std::vector<int32_t> cat_col_;
-  std::vector<double> cat_;  // the concatenation (vectors and matrix values)
+  std::vector<int64_t> blocks_, bytes_;
+  std::vector<double> cat_;  // the vectors' concatenation
   int64_t matrix_bytes_ = 0;
 };
 
