@@ -1,11 +1,11 @@
 #pragma once
 // The multigrid's finest level on several ranks: every rank's free
-// particles, in the order one rank lists them (tile, then index), and K's
-// rows and vectors gathered into it, so that every rank builds and runs the
-// one-rank V-cycle on the same numbers (replicated: bitwise the one-rank
-// result). The product's vectors stay split; each V-cycle gathers its
-// right-hand side (3 doubles a free particle) and each rank takes its own
-// rows of the result.
+// particles, in the order one rank lists them (tile, then index), and
+// vectors (and, where the finest level is not divided, K's rows) gathered
+// into it, so that every rank works on the one-rank numbers (bitwise the
+// one-rank result). The product's vectors stay split; the whole cycle
+// gathers its right-hand side (3 doubles a free particle) and each rank
+// takes its own rows of the result.
 #include <algorithm>
 #include <cstdint>
 #include <vector>
