@@ -341,6 +341,8 @@ TEST(Memory, OneRankGathersNoLevel) {
     w.loop->memory(t);
     EXPECT_TRUE(listed(t, kGatheredLevel));
     EXPECT_EQ(row_bytes(t, kGatheredLevel), 0u);
+    EXPECT_TRUE(listed(t, kGatheredVectors));
+    EXPECT_EQ(row_bytes(t, kGatheredVectors), 0u);
     EXPECT_EQ(newton.multigrid_builds_bytes() + newton.multigrid_cycles_bytes(), 0);
     EXPECT_EQ(newton.multigrid_build_bytes() + newton.multigrid_cycle_bytes(), 0);
   }

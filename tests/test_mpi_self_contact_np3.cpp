@@ -335,15 +335,29 @@ TEST(MpiSelfContact, AssembledStiffnessSameOnOneTwoAndThreeRanks) {
 // divided (DividedLevel: each rank's rows of K, the ghosts' entries
 // exchanged, level 1's right-hand side gathered). Counts over the ranks:
 // entries that differ in any bit, the ghosts, and the ghosts' blocks in K
-// that are self-contact's (partners on another rank).
+// that are self-contact's (partners on another rank). With the bilinear
+// finest P, a third time with the levels built from no K whole (each rank's
+// rows and its ring's): the entries of level 1's operator that differ from
+// the whole build's in any bit, the cycle's entries that differ, and on the
+// largest rank the bytes that build gathered (level 1's rows, the power
+// iteration's vectors, here less the latter) against K's whole (RankRows::matrix_bytes).
 struct Divided {
   int64_t differ = -1, ghosts = 0, contact_blocks = 0, levels = 0;
+  int64_t level_one_differ = -1, built_differ = -1, build_bytes = 0, level_one_bytes = 0, whole_bytes = 0;
 };
+
+// Entries (pattern or values) in which two matrices differ in any bit.
+int64_t matrix_differ(const BlockMatrix& a, const BlockMatrix& b) {
+  if (a.rows != b.rows || a.start != b.start || a.col != b.col) return std::max<int64_t>(1, a.blocks());
+  int64_t n = 0;
+  for (size_t k = 0; k < a.val.size(); ++k) n += std::memcmp(&a.val[k], &b.val[k], sizeof(double)) != 0;
+  return n;
+}
 
 Divided divided_cycle(int ranks, const MultigridSettings& ms) {
   MPI_Comm comm;
   MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
-  int64_t counts[4] = {0, 0, 0, 0};
+  int64_t counts[9] = {0, 0, 0, 0, -1, -1, 0, 0, 0};
   if (comm != MPI_COMM_NULL) {
     RunOptions opt;
     opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_divided_" + std::to_string(ranks);
@@ -362,7 +376,8 @@ Divided divided_cycle(int ranks, const MultigridSettings& ms) {
     Multigrid mg(ms);
     mg.setup(all, rr.ids(), w.cloth.grid.ni, w.cloth.grid.nj, 1);
     DividedLevel dl;
-    dl.plan(red, rr, mine, all, mg);
+    dl.plan(red, rr, mine, mg);
+    dl.build(red, rr, mine, mg, true, true);
     const int64_t n = rr.size(), own = mine.rows;
     std::mt19937_64 rng(11);
     std::uniform_real_distribution<double> u(-1, 1);
@@ -375,7 +390,7 @@ Divided divided_cycle(int ranks, const MultigridSettings& ms) {
     for (int round = 0; round < 2; ++round) {  // the second from the first's leftovers
       mg.apply(b.data(), x.data());
       rr.take_mine(x.data(), want.data());
-      dl.apply(red, mine, all, mg, b_mine.data(), got.data());
+      dl.apply(red, mine, mg, b_mine.data(), got.data());
       for (int64_t k = 0; k < 3 * own; ++k) differ += std::memcmp(&want[k], &got[k], sizeof(double)) != 0;
       for (double& v : b_mine) v *= -0.5;
       for (double& v : b) v *= -0.5;
@@ -384,10 +399,32 @@ Divided divided_cycle(int ranks, const MultigridSettings& ms) {
     counts[1] = red.sum_i64(dl.ghosts());
     counts[2] = red.sum_i64(contact_ghost_blocks(mine, rr, ev.self_contact()));
     counts[3] = mg.levels();
+    if (mg.finest_divisible()) {
+      Multigrid md(ms);
+      DividedLevel dd;
+      const bool fresh = md.setup_points(rr.ids(), w.cloth.grid.ni, w.cloth.grid.nj, 1);
+      dd.plan(red, rr, mine, md);
+      dd.build(red, rr, mine, md, false, fresh);
+      counts[4] = red.sum_i64(red.rank() == 0 ? matrix_differ(mg.matrix(1), md.matrix(1)) : 0);
+      for (double& v : b) v *= 4;  // the first round's right-hand side
+      mg.apply(b.data(), x.data());
+      rr.take_mine(x.data(), want.data());
+      for (int64_t r = 0; r < own; ++r)
+        for (int k = 0; k < 3; ++k) b_mine[3 * r + k] = b[3 * rr.mine()[r] + k];
+      dd.apply(red, mine, md, b_mine.data(), got.data());
+      int64_t built = 0;
+      for (int64_t k = 0; k < 3 * own; ++k) built += std::memcmp(&want[k], &got[k], sizeof(double)) != 0;
+      counts[5] = red.sum_i64(built);
+      const BlockMatrix& one = dd.level_one_rows();
+      counts[6] = int64_t(red.max(double(dd.build_bytes() - 13 * rr.vector_bytes())));  // less the vectors
+      counts[7] = int64_t(red.max(double(8 * md.matrix(1).rows + 76 * md.matrix(1).blocks())));
+      counts[8] = int64_t(red.max(double(rr.matrix_bytes())));
+      if (one.rows == 0) counts[5] += 1000000;  // a rank without level-1 rows covers nothing
+    }
     MPI_Comm_free(&comm);
   }
-  quiet_bcast(counts, 4, MPI_INT64_T);
-  return {counts[0], counts[1], counts[2], counts[3]};
+  quiet_bcast(counts, 9, MPI_INT64_T);
+  return {counts[0], counts[1], counts[2], counts[3], counts[4], counts[5], counts[6], counts[7], counts[8]};
 }
 
 // Chebyshev of degree 1 (the default: no product in the pre-smoother) and
@@ -407,6 +444,15 @@ TEST(MpiSelfContact, DividedFinestLevelSameCycleOnTwoAndThreeRanks) {
         EXPECT_GT(d.ghosts, 0) << label;
         EXPECT_GT(d.contact_blocks, 0) << label << ": no self-contact block reaches another rank";
         EXPECT_EQ(d.differ, 0) << label << ", " << ranks << " ranks: entries that differ from the whole cycle's";
+        if (ip != Interpolation::Bilinear) continue;
+        // Built from no K whole: level 1's operator and the cycle bitwise
+        // the whole build's; gathered, level 1's rows and 13 vectors (the
+        // cold power iteration's 12 steps and its start), well under K.
+        EXPECT_EQ(d.level_one_differ, 0) << label << ", " << ranks << " ranks: level 1's operator differs";
+        EXPECT_EQ(d.built_differ, 0) << label << ", " << ranks << " ranks: the cycle built from rows differs";
+        EXPECT_GT(d.level_one_bytes, 0);
+        EXPECT_LT(2 * d.level_one_bytes, d.whole_bytes) << label << ": level 1's rows are not well under K's";
+        EXPECT_EQ(d.build_bytes, d.level_one_bytes) << label << ": gathered more than level 1's rows and 13 vectors";
       }
     }
 }

@@ -186,6 +186,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("cycles_bytes", (long long)mg.cycles)
       .value("cycles_cpu_seconds_largest_rank", mg.cpu_max)
       .value("cycles_cpu_seconds_all_ranks", mg.cpu_sum)
+      .value("builds_cpu_seconds_largest_rank", mg.build_cpu_max)
+      .value("builds_cpu_seconds_all_ranks", mg.build_cpu_sum)
       .end_object();
   j.value("simulated_seconds", cloth.time);
   j.value("iterations_per_simulated_second", cloth.time > 0 ? n.iterations / cloth.time : 0.0);

@@ -80,11 +80,12 @@ struct Summary {
   int64_t picture_positions = 0;   // the positions rank 0 received to draw the picture
   std::vector<MultigridLevelStats> multigrid;  // the last mesh's levels (none with jacobi)
   // Bytes gathered into each rank for the multigrid (0 on one rank): K's
-  // rows at the last build and a V-cycle's right-hand side, and their sums
+  // rows or level 1's and the power iteration's vectors at the last build and a V-cycle's right-hand side, and their sums
   // over this process's builds and V-cycles; the builds (either way).
   struct Gathered {
     int64_t build = 0, cycle = 0, builds = 0, cycles = 0, build_count = 0;
     double cpu_max = 0, cpu_sum = 0;  // CPU seconds in the V-cycles: the largest rank's, all ranks together
+    double build_cpu_max = 0, build_cpu_sum = 0;  // CPU seconds in the builds, the same way
   } multigrid_gathered;
   // What the run solved (report.json and the closing line).
   bool sequencing = false;    // grid sequencing was on (coarse uniform meshes first)

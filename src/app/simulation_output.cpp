@@ -207,6 +207,8 @@ void Simulation::write_final_state(double& depth, std::string& checksum) {
                              newton.multigrid_builds()};
   sum_.multigrid_gathered.cpu_max = r.max(newton.precondition_cpu_seconds());  // collective
   sum_.multigrid_gathered.cpu_sum = 1e-6 * double(r.sum_i64(int64_t(1e6 * newton.precondition_cpu_seconds())));
+  sum_.multigrid_gathered.build_cpu_max = r.max(newton.build_cpu_seconds());
+  sum_.multigrid_gathered.build_cpu_sum = 1e-6 * double(r.sum_i64(int64_t(1e6 * newton.build_cpu_seconds())));
   loop->release_solvers();  // stepping is over: the picture reuses their memory
   settle_for_output();
   sum_.penetration_written = max_penetration_written(cloth, model, tiling, dec_.owned, r);

@@ -40,11 +40,14 @@ void NewtonSolver::memory(MemoryTable& t) const {
             sizeof(double));
   t.add(o, "ids", ids_);
   // Whole-level arrays, held only by the multigrid on several ranks: every
-  // rank's rows of K, the V-cycle's right-hand side and result, the maps.
-  t.add(o, "gathered K, right-hand side and result (multigrid, several ranks)",
+  // rank's rows of K (where the finest level is not divided), the whole
+  // cycle's right-hand side and result and the rows' maps.
+  t.add(o, "gathered K (multigrid, several ranks, finest level not divided)",
         kg_.start.capacity() * sizeof(int64_t) + kg_.col.capacity() * sizeof(int32_t) +
-            (kg_.val.capacity() + rg_.capacity() + xg_.capacity()) * sizeof(double) + ranks_.memory());
-  t.add(o, "the finest level divided: ghosts, columns, messages, own and level-1 vectors (several ranks)",
+            kg_.val.capacity() * sizeof(double));
+  t.add(o, "gathered right-hand side and result, the rows' maps (multigrid, several ranks)",
+        (rg_.capacity() + xg_.capacity()) * sizeof(double) + ranks_.memory());
+  t.add(o, "the finest level divided: ghosts, ring's K rows, K P and level-1 rows, smoother blocks, messages, vectors (several ranks)",
         div_.memory());
 }
 
@@ -76,10 +79,13 @@ uint64_t pattern_stamp(const Evaluator& ev) {
 // K assembled at z and the levels over it. The compact vectors number the
 // free particles as the particle list does (tile, then index): the
 // assembled rows' order, checked when the lists change.
-// On several ranks every rank assembles its rows with global columns, and
-// the levels are built from all of them, gathered in one rank's order, on
-// every rank alike (RankRows); the V-cycle's finest level then runs on each
-// rank's own rows (DividedLevel), planned when the levels are rebuilt.
+// On several ranks every rank assembles its rows with global columns. Where
+// the finest level can be divided (the bilinear finest P, point smoothing)
+// no rank holds K whole: each builds the finest smoother and its level-1
+// points' rows of R K P from its rows and a ring of others' (DividedLevel),
+// and level 1, gathered, builds the levels below on every rank alike. Else
+// (or with the division off) the levels are built from all ranks' rows of
+// K, gathered in one rank's order, on every rank (RankRows).
 void NewtonSolver::setup_multigrid(Evaluator& ev) {
   const ActiveLists& lists = ev.lists();
   const Reducer& red = dots_.reducer();
@@ -101,10 +107,21 @@ void NewtonSolver::setup_multigrid(Evaluator& ev) {
     std::vector<double>(size_t(3 * ranks_.size()), 0.0).swap(xg_);
   }
   ev.assemble_stiffness(k_, &ranks_.column_of(), ranks_.size(), stamp);
-  ranks_.gather_matrix(red, k_, kg_);
-  mg_builds_bytes_ += ranks_.matrix_bytes();
-  mg_.setup(kg_, ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
-  if (divided_on_ && mg_.finest_by_points() && (renumber || !div_.planned(mg_))) div_.plan(red, ranks_, k_, kg_, mg_);
+  const bool fresh = mg_.setup_points(ranks_.ids(), c_.grid.ni, c_.grid.nj, stamp);
+  const bool whole = !(divided_on_ && mg_.finest_divisible());
+  if (whole) {
+    ranks_.gather_matrix(red, k_, kg_);
+    build_bytes_ = ranks_.matrix_bytes();
+    mg_.setup_values(kg_, fresh);
+  } else {
+    if (kg_.rows != 0) kg_ = BlockMatrix();  // held by the gathered build alone
+  }
+  if (divided_on_ && mg_.finest_by_points()) {
+    if (renumber || !div_.planned(mg_)) div_.plan(red, ranks_, k_, mg_);
+    div_.build(red, ranks_, k_, mg_, whole, fresh);
+    if (!whole) build_bytes_ = div_.build_bytes();
+  }
+  mg_builds_bytes_ += build_bytes_;
 }
 
 // The finest level divided over the ranks (DividedLevel), where it is
@@ -133,7 +150,7 @@ void NewtonSolver::apply_preconditioner(const double* r, double* s) {
     return;
   }
   if (divided()) {
-    div_.apply(dots_.reducer(), k_, kg_, mg_, r, s);
+    div_.apply(dots_.reducer(), k_, mg_, r, s);
     mg_cycles_bytes_ += div_.gathered_bytes();
     return;
   }
@@ -182,7 +199,9 @@ int NewtonSolver::linear_solve(Evaluator& ev, const double* z, int budget, doubl
     ScopedPhase ph(tm, kScaling);
     ev.stiffness_diagonal_local(z, diag);
     if (mg && multigrid_stale(ev)) {
+      const double c0 = process_cpu();
       setup_multigrid(ev);
+      build_cpu_ += process_cpu() - c0;
       mg_solves_ = 0;
       ++mg_builds_;
     }
@@ -391,6 +410,7 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
     throw std::logic_error("NewtonSolver: more unknowns than the compact vectors hold");
   mg_solves_ = 0;  // a new step (or a retry): the V-cycle is built afresh,
   mg_.forget();    // from this step's K alone (restarts stay bitwise)
+  div_.forget();
   double c_prev = -1, eta_prev = 0;  // the last iteration's cost and forcing (none yet: -1)
   while (std::isfinite(c0) && c0 * norm >= st.tolerance && res.iterations < st.max_iterations) {
     if (st.stop_requested && st.stop_requested()) {

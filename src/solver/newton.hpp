@@ -44,7 +44,9 @@ class NewtonSolver {
   void set_divided(bool on) { divided_on_ = on; }
   // This process's CPU seconds in the V-cycles so far (all its threads).
   double precondition_cpu_seconds() const { return pc_cpu_; }
-  int64_t multigrid_build_bytes() const { return dots_.reducer().ranks() > 1 ? ranks_.matrix_bytes() : 0; }
+  // ... and in the multigrid's builds (K's assembly included).
+  double build_cpu_seconds() const { return build_cpu_; }
+  int64_t multigrid_build_bytes() const { return dots_.reducer().ranks() > 1 ? build_bytes_ : 0; }
   int64_t multigrid_builds_bytes() const { return mg_builds_bytes_; }
   int64_t multigrid_cycles_bytes() const { return mg_cycles_bytes_; }
   // The multigrid's levels (empty with Jacobi).
@@ -125,8 +127,9 @@ class NewtonSolver {
   // Solves on the current build, and the first's and last's iterations.
   int mg_solves_ = 0, mg_first_ = 0, mg_last_ = 0;
   int64_t mg_builds_ = 0;  // hierarchies built so far
+  int64_t build_bytes_ = 0;  // gathered into this rank in the last build (several ranks)
   int64_t mg_builds_bytes_ = 0, mg_cycles_bytes_ = 0;  // gathered into this rank so far (several ranks)
-  double pc_cpu_ = 0;
+  double pc_cpu_ = 0, build_cpu_ = 0;
 };
 
 }  // namespace drape

@@ -26,9 +26,16 @@ inline bool follows_the_grid(const MemoryTable::Row& r) {
 
 // The finest level's arrays gathered whole into every rank: allowed only
 // with the multigrid on several ranks (0 on one rank and with Jacobi:
-// test_memory, test_mpi_memory_np2 check it).
+// test_memory, test_mpi_memory_np2 check it), K only where its finest
+// level is not divided.
 inline const char* const kGatheredLevel =
-    "NewtonSolver: gathered K, right-hand side and result (multigrid, several ranks)";
+    "NewtonSolver: gathered K (multigrid, several ranks, finest level not divided)";
+inline const char* const kGatheredVectors =
+    "NewtonSolver: gathered right-hand side and result, the rows' maps (multigrid, several ranks)";
+
+inline const char* const kDividedLevel =
+    "NewtonSolver: the finest level divided: ghosts, ring's K rows, K P and level-1 rows, smoother blocks, messages, "
+    "vectors (several ranks)";
 
 inline size_t row_bytes(const MemoryTable& t, const std::string& key) {
   size_t bytes = 0;
@@ -49,7 +56,9 @@ inline std::map<std::string, size_t> list_sized_rows(const TimeLoop& loop) {
   loop.memory(t);
   std::map<std::string, size_t> rows;
   for (const MemoryTable::Row& r : t.rows)
-    if (!follows_the_grid(r) && r.owner + ": " + r.array != kGatheredLevel) rows[r.owner + ": " + r.array] += r.bytes;
+    if (!follows_the_grid(r) && r.owner + ": " + r.array != kGatheredLevel &&
+        r.owner + ": " + r.array != kGatheredVectors)
+      rows[r.owner + ": " + r.array] += r.bytes;
   return rows;
 }
 

@@ -118,6 +118,13 @@ inline void add_block_times(const double* b, const double* x, double s, double* 
   for (int i = 0; i < 3; ++i) y[i] += s * (b[3 * i] * x[0] + b[3 * i + 1] * x[1] + b[3 * i + 2] * x[2]);
 }
 
+// out += a b (3 x 3, row-major): the block products' one sum (BlockMatrix
+// products and a rank's rows of level 1's operator, DividedLevel).
+inline void add_block_product(const double* __restrict a, const double* __restrict b, double* __restrict out) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) out[3 * i + j] += a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+}
+
 // The inverse of a symmetric positive definite 3 x 3 block (by cofactors);
 // false where it is not invertible.
 bool invert_block(const double* a, double* inv);

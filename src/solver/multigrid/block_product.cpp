@@ -8,12 +8,6 @@
 namespace drape {
 
 namespace {
-// out += a b (3 x 3, row-major).
-inline void add_product(const double* __restrict a, const double* __restrict b, double* __restrict out) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) out[3 * i + j] += a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-}
-
 // The scratch of the calling thread's products (the products run one at a
 // time from it): kept between calls so that rebuilt patterns allocate nothing.
 struct ProductScratch {
@@ -51,7 +45,7 @@ void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, Blo
       for (int64_t k = A.start[r]; k < A.start[r + 1]; ++k) {
         const int64_t g = A.col[k];
         const double* a = &A.val[9 * k];
-        for (int64_t b = B.start[g]; b < B.start[g + 1]; ++b) add_product(a, &B.val[9 * b], &C.val[9 * slot[B.col[b]]]);
+        for (int64_t b = B.start[g]; b < B.start[g + 1]; ++b) add_block_product(a, &B.val[9 * b], &C.val[9 * slot[B.col[b]]]);
       }
       for (int64_t k = C.start[r]; k < C.start[r + 1]; ++k) slot[C.col[k]] = -1;
     }

@@ -57,24 +57,39 @@ void Multigrid::build_levels(const std::vector<int64_t>& ids, int ni, int nj) {
 }
 
 void Multigrid::setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp) {
-  a0_ = &A0;
+  setup_values(A0, setup_points(ids, ni, nj, stamp));
+}
+
+bool Multigrid::setup_points(const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp) {
   // The levels' points and transfers follow the particles alone: a new
   // pattern of K (self-contact's pairs) keeps them and rebuilds the products.
   const bool relevel = levels_.empty() || ni != ni_ || nj != nj_ || ids != levels_[0].ids;
-  const bool fresh = relevel || stamp != stamp_ || stamp == 0 || A0.rows != rows_;
+  const bool fresh = relevel || stamp != stamp_ || stamp == 0 || int64_t(ids.size()) != rows_;
   if (relevel) build_levels(ids, ni, nj);
   else if (fresh) forget();  // a new pattern's smoothers start cold, as new levels' do
   ni_ = ni;
   nj_ = nj;
   stamp_ = stamp;
-  rows_ = A0.rows;
+  rows_ = int64_t(ids.size());
+  return fresh;
+}
+
+void Multigrid::setup_below(bool fresh, int64_t finest_blocks) {
+  a0_ = nullptr;  // held by no one whole
+  stats_[0].blocks = finest_blocks;
+  build_from(1, fresh);
+}
+
+// Levels first to last: each one's operator (the Galerkin product of the
+// one above, below `first`), smoother and transfer, or the factorisation.
+void Multigrid::build_from(int first, bool fresh) {
   const int last = levels() - 1;
-  for (int l = 0; l <= last; ++l) {
+  for (int l = first; l <= last; ++l) {
     const double t0 = omp_get_wtime();
-    if (l > 0) galerkin(matrix(l - 1), levels_[l - 1].transfer(), levels_[l - 1].AP, levels_[l].A, fresh);
+    if (l > first) galerkin(matrix(l - 1), levels_[l - 1].transfer(), levels_[l - 1].AP, levels_[l].A, fresh);
     Level& L = levels_[l];
     if (l < last) {
-      if (L.lines) L.line.setup(matrix(l), L.ids, ni, nj, L.stride, fresh);
+      if (L.lines) L.line.setup(matrix(l), L.ids, ni_, nj_, L.stride, fresh);
       if (!L.lines || L.smoothed) L.smoother.setup(matrix(l), s_.degree, s_.ratio);
       if (L.smoothed)
         smooth_prolongation(matrix(l), L.smoother.dinv(), L.smoother.estimate(), L.P0, L.AP0, L.P, fresh);

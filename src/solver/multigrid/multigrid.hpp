@@ -80,6 +80,25 @@ class Multigrid {
   // the patterns when `stamp` (K's pattern's) changes or is 0, the values
   // every call. A0 must outlive the next apply.
   void setup(const BlockMatrix& A0, const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp);
+  // The same in two halves, for a finest level that no one holds whole (its
+  // rows divided over ranks: DividedLevel): the points and transfers, which
+  // follow ids alone (returns whether the patterns are new: `fresh`); then,
+  // once the caller has set level 1's operator (level_one()) and the finest
+  // level's size (finest_blocks), the levels from 1 down.
+  bool setup_points(const std::vector<int64_t>& ids, int ni, int nj, uint64_t stamp);
+  // setup's second half: every level's values from A0 whole.
+  void setup_values(const BlockMatrix& A0, bool fresh) {
+    a0_ = &A0;
+    build_from(0, fresh);
+  }
+  void setup_below(bool fresh, int64_t finest_blocks);
+  BlockMatrix& level_one() { return levels_[1].A; }
+  // Whether the finest level's transfer and smoother need no more than its
+  // own rows of A0 and a ring around them (the bilinear P, point smoothing).
+  bool finest_divisible() const {
+    return finest_by_points() && !levels_[0].smoothed && !levels_[0].fitted;
+  }
+  const MultigridSettings& settings() const { return s_; }
   // The next setup carries nothing over from earlier ones (the smoothers'
   // eigenvector estimates): a run restarted at a step builds what the
   // uninterrupted run built there.
@@ -133,6 +152,7 @@ class Multigrid {
   void build_levels(const std::vector<int64_t>& ids, int ni, int nj);
   void fit(int l);
   void cycle_vectors(const BlockMatrix& A);
+  void build_from(int first, bool fresh);
 
   MultigridSettings s_;
   std::vector<Level> levels_;

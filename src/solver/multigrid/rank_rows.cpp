@@ -29,39 +29,43 @@ void RankRows::number(const Reducer& red, const Tiling& tiling, const std::vecto
   }
   mine_.resize(mine.size());
   for (size_t r = 0; r < mine.size(); ++r) mine_[r] = column_of_[mine[r]];
+  std::vector<double>(size_t(3 * n)).swap(cat_);
 }
 
-void RankRows::gather_matrix(const Reducer& red, const BlockMatrix& mine, BlockMatrix& all) {
-  const int64_t n = size();
+int64_t gather_rows(const Reducer& red, const BlockMatrix& mine, const std::vector<int64_t>& rows_per_rank,
+                    const std::vector<int64_t>& from, BlockMatrix& all) {
+  int64_t n = 0;
+  for (int64_t c : rows_per_rank) n += c;
+  std::vector<int64_t> bytes, blocks;
   // Row lengths, then columns and values, each concatenated in rank order.
-  len_.resize(size_t(mine.rows));
-  for (int64_t r = 0; r < mine.rows; ++r) len_[r] = mine.start[r + 1] - mine.start[r];
-  std::vector<int64_t> cat_len(static_cast<size_t>(n));
-  gather_all(red, len_.data(), rows_, cat_len.data(), bytes_);
-  cat_start_.assign(size_t(n) + 1, 0);
-  for (int64_t k = 0; k < n; ++k) cat_start_[k + 1] = cat_start_[k] + cat_len[k];
-  red.counts(mine.blocks(), blocks_);
-  cat_col_.resize(size_t(cat_start_[n]));
-  gather_all(red, mine.col.data(), blocks_, cat_col_.data(), bytes_);
-  for (int64_t& b : blocks_) b *= 9;
-  cat_.resize(size_t(9 * cat_start_[n]));
-  gather_all(red, mine.val.data(), blocks_, cat_.data(), bytes_);
-  matrix_bytes_ = 8 * n + cat_start_[n] * (4 + 72);
+  std::vector<int64_t> len(size_t(mine.rows)), cat_len(static_cast<size_t>(n)), cat_start(size_t(n) + 1, 0);
+  for (int64_t r = 0; r < mine.rows; ++r) len[r] = mine.start[r + 1] - mine.start[r];
+  gather_all(red, len.data(), rows_per_rank, cat_len.data(), bytes);
+  for (int64_t k = 0; k < n; ++k) cat_start[k + 1] = cat_start[k] + cat_len[k];
+  red.counts(mine.blocks(), blocks);
+  std::vector<int32_t> cat_col(size_t(cat_start[n]));
+  gather_all(red, mine.col.data(), blocks, cat_col.data(), bytes);
+  for (int64_t& b : blocks) b *= 9;
+  std::vector<double> cat(size_t(9 * cat_start[n]));
+  gather_all(red, mine.val.data(), blocks, cat.data(), bytes);
   // Rows in global order.
   all.rows = n;
   all.start.resize(size_t(n) + 1);
   all.start[0] = 0;
-  for (int64_t g = 0; g < n; ++g) all.start[g + 1] = all.start[g] + cat_len[from_[g]];
+  for (int64_t g = 0; g < n; ++g) all.start[g + 1] = all.start[g] + cat_len[from[g]];
   all.col.resize(size_t(all.start[n]));
   all.val.resize(size_t(9 * all.start[n]));
 #pragma omp parallel for schedule(static)
   for (int64_t g = 0; g < n; ++g) {
-    const int64_t s = cat_start_[from_[g]], e = cat_start_[from_[g] + 1];
-    std::copy(cat_col_.begin() + s, cat_col_.begin() + e, all.col.begin() + all.start[g]);
-    std::copy(cat_.begin() + 9 * s, cat_.begin() + 9 * e, all.val.begin() + 9 * all.start[g]);
+    const int64_t s = cat_start[from[g]], e = cat_start[from[g] + 1];
+    std::copy(cat_col.begin() + s, cat_col.begin() + e, all.col.begin() + all.start[g]);
+    std::copy(cat.begin() + 9 * s, cat.begin() + 9 * e, all.val.begin() + 9 * all.start[g]);
   }
-  std::vector<double>(size_t(3 * n)).swap(cat_);  // the vectors' concatenation from here on
-  std::vector<int32_t>().swap(cat_col_);
+  return 8 * n + cat_start[n] * (4 + 72);
+}
+
+void RankRows::gather_matrix(const Reducer& red, const BlockMatrix& mine, BlockMatrix& all) {
+  matrix_bytes_ = gather_rows(red, mine, rows_, from_, all);
 }
 
 void RankRows::gather(const Reducer& red, const double* mine, double* all) {
@@ -82,7 +86,7 @@ void RankRows::take_mine(const double* all, double* mine) const {
 }
 
 size_t RankRows::memory() const {
-  return (ids_.capacity() + rows_.capacity() + from_.capacity() + first_.capacity() + mine_.capacity() + cat_start_.capacity()) * 8 +
+  return (ids_.capacity() + rows_.capacity() + from_.capacity() + first_.capacity() + mine_.capacity()) * 8 +
          column_of_.capacity() * 4 + cat_.capacity() * 8;
 }
 

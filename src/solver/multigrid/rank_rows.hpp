@@ -1,11 +1,11 @@
 #pragma once
 // The multigrid's finest level on several ranks: every rank's free
-// particles, in the order one rank lists them (tile, then index), and K's
-// rows and vectors gathered into it, so that every rank builds and runs the
-// one-rank V-cycle on the same numbers (replicated: bitwise the one-rank
-// result). The product's vectors stay split; each V-cycle gathers its
-// right-hand side (3 doubles a free particle) and each rank takes its own
-// rows of the result.
+// particles, in the order one rank lists them (tile, then index), and
+// vectors (and, where the finest level is not divided, K's rows) gathered
+// into it, so that every rank works on the one-rank numbers (bitwise the
+// one-rank result). The product's vectors stay split; the whole cycle
+// gathers its right-hand side (3 doubles a free particle) and each rank
+// takes its own rows of the result.
 #include <algorithm>
 #include <cstdint>
 #include <vector>
@@ -15,6 +15,13 @@
 #include "solver/reducer.hpp"
 
 namespace drape {
+
+// Every rank's rows of a block matrix (global columns), concatenated in
+// rank order, into one matrix whose row g is the concatenation's row
+// from[g]: the ranks' rows whole, in one order, on every rank. Collective.
+// Returns the bytes this rank received (8 a row, 4 + 72 a block).
+int64_t gather_rows(const Reducer& red, const BlockMatrix& mine, const std::vector<int64_t>& rows_per_rank,
+                    const std::vector<int64_t>& from, BlockMatrix& all);
 
 class RankRows {
  public:
@@ -49,9 +56,8 @@ class RankRows {
   std::vector<int64_t> first_;       // per rank: its first row in the concatenation
   std::vector<int64_t> mine_;        // this rank's row -> global row
   std::vector<int32_t> column_of_;
-  std::vector<int64_t> blocks_, bytes_, len_, cat_start_;
-  std::vector<int32_t> cat_col_;
-  std::vector<double> cat_;  // the concatenation (vectors and matrix values)
+  std::vector<int64_t> blocks_, bytes_;
+  std::vector<double> cat_;  // the vectors' concatenation
   int64_t matrix_bytes_ = 0;
 };
 

@@ -33,11 +33,11 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
   // moved a little: 3 steps). Too few steps from a cold start underestimate
   // lmax, and the polynomial then amplifies the spectrum's top (6 steps at
   // 129 x 129 took a solve from 30 iterations to 237).
-  int steps = 3;
+  int steps = warm_steps;
   if (eig_.size() != size_t(3 * n)) {
     eig_.resize(size_t(3 * n));
-    for (int64_t i = 0; i < 3 * n; ++i) eig_[i] = 1.0 + 0.1 * double((i * 7) % 13);
-    steps = 12;
+    for (int64_t i = 0; i < 3 * n; ++i) eig_[i] = start_entry(i);
+    steps = cold_steps;
   }
   double lam = 1;
   for (int it = 0; it < steps; ++it) {
@@ -48,6 +48,11 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
     apply_dinv(n, [&](int64_t i) { return &dinv_[9 * i]; }, r_.data(), eig_.data());
     lam = std::sqrt(norm2(eig_));
   }
+  set_spectrum(degree, ratio, lam);
+}
+
+void Chebyshev::set_spectrum(int degree, double ratio, double lam) {
+  degree_ = degree;
   estimate_ = lam;
   // The polynomial amplifies every eigenvalue above lmax + lmin (its
   // residual passes -1 or +1 there), and then the V-cycle is no longer

@@ -7,6 +7,7 @@
 // It damps the eigenvalues of D^-1 A in [lmax / ratio, lmax]: the coarse
 // level takes the rest; lmax by power iteration, times 1.1 (ratios up to 10)
 // or so that lmax + lmin is 1.21 x the estimate (above 10).
+#include <cstdint>
 #include <vector>
 
 #include "solver/multigrid/block_matrix.hpp"
@@ -34,6 +35,13 @@ class Chebyshev {
   const std::vector<double>& dinv() const { return dinv_; }
   // The next setup estimates lmax from scratch (no history carried).
   void forget() { eig_.clear(); }
+  // The polynomial for a spectrum estimate made elsewhere (a level divided
+  // over ranks: DividedLevel), as setup sets it from its own.
+  void set_spectrum(int degree, double ratio, double estimate);
+  // The power iteration's cold start, entry i (3 a row).
+  static double start_entry(int64_t i) { return 1.0 + 0.1 * double((i * 7) % 13); }
+  // Power iteration steps: cold (from start_entry), warm (from the last set-up's vector).
+  static constexpr int cold_steps = 12, warm_steps = 3;
 
  private:
   template <class Dinv>
