@@ -1179,6 +1179,49 @@ TEST(Evaluator, FollowsItsListsAcrossMeshChanges) {
   }
 }
 
+// A triple's and a cell's kept gradients are, bit for bit, the ones a product
+// that keeps nothing computes from z: kept by settled_cost's pass (the
+// four-lane kernels) and by a diagonal at a z no settled_cost saw (the
+// scalar ones), on a plain and an AMRC mesh. Bit for bit, not near: a
+// product's K v can absorb a last-bit difference in a gradient that a long
+// run's checksum would not.
+TEST(Stiffness, KeptGradientsAreZsBitForBit) {
+  for (bool amrc : {false, true}) {
+    const auto world = random_world(15, amrc);
+    Simulation& w = *world;
+    Evaluator& ev = w.loop->evaluator();
+    std::vector<double> diag(w.cloth.z.size());
+    const char* mesh = amrc ? "AMRC mesh" : "plain mesh";
+    auto same = [&](const char* when) {
+      const double* z = w.cloth.z.data();
+      int64_t checked = 0;
+      for (int kind : {1, 2}) {
+        const ActiveList& own = kind == 1 ? w.lists.triples : w.lists.shears;
+        const ActiveList& ring = kind == 1 ? w.lists.ring_triples : w.lists.ring_shears;
+        const int n = kind == 1 ? 3 : 4;
+        for (int64_t pos = 0; pos < own.size() + ring.size(); ++pos) {
+          V3<double> computed[4], kept[4];
+          ev.element_gradients(kind, pos, z, computed, kept);
+          for (int k = 0; k < n; ++k, ++checked) {
+            EXPECT_EQ(computed[k].x, kept[k].x) << mesh << when << " kind " << kind << " at " << pos << " part " << k;
+            EXPECT_EQ(computed[k].y, kept[k].y) << mesh << when << " kind " << kind << " at " << pos << " part " << k;
+            EXPECT_EQ(computed[k].z, kept[k].z) << mesh << when << " kind " << kind << " at " << pos << " part " << k;
+          }
+        }
+      }
+      EXPECT_GT(checked, 100) << mesh << when << ": no elements: the test does not test";
+    };
+    ev.settled_cost(w.cloth.z.data());
+    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+    same(", settled_cost's");
+    for (int64_t p : w.lists.particles.items) w.cloth.z[3 * p + 2] += 1e-3 * w.cloth.grid.hi * (p % 5);
+    ev.hysteresis_forces(w.cloth.z.data());
+    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+    EXPECT_FALSE(ev.diagonal_reads_settled()) << mesh << ": the diagonal's own pass is not taken";
+    same(", the diagonal's");
+  }
+}
+
 // Newton's runs hold one number a triple and a cell in the element buffers
 // (the particles multiply it by the kept gradients): the residual, K's
 // diagonal and K v are the wide buffers' bit for bit. The same world

@@ -114,6 +114,13 @@ class Evaluator {
   CostTerms settled_cost(double* z);
   // Whether stiffness_diagonal would read settled_cost's numbers now.
   bool diagonal_reads_settled() const { return settled_; }
+  // The strain gradient of the triple (kind 1) or cell (kind 2) at list
+  // position pos (the ring's after this rank's): `computed` as a product
+  // that keeps nothing computes it from z, `kept` read back from the kept
+  // numbers (keeping products, after settled_cost or stiffness_diagonal at
+  // z). Tests hold them to the same bits: what a product recomputes from z
+  // must be what was kept.
+  void element_gradients(int kind, int64_t pos, const double* z, V3<double>* computed, V3<double>* kept) const;
   // Sets every active element force to its hysteresis target (Band::stop) at
   // the positions in z: there the band and memory costs vanish and the cost
   // is the Newton term alone, a function of the positions.
@@ -653,6 +660,10 @@ class Evaluator {
     ids[0] = s;
     for (int k = 0; k < 3; ++k) ids[k + 1] = nb_s_[3 * pos + k];
   }
+  // A triple's and a cell's strain gradients at z, as the products that
+  // keep nothing compute them.
+  void triple_gradients(int64_t s, int64_t pos, const double* z, V3<double> g[3]) const;
+  void cell_gradients(int64_t s, int64_t pos, const double* z, V3<double> g[4]) const;
   // The strains the bands read (stiffness.cpp), of the element at pos; x
   // holds p at slot[p] (null: at p).
   double edge_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;

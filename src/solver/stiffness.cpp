@@ -139,10 +139,8 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     double mine[kKgTriple];
     double* kg = keep_ ? &kg_t_[kKgTriple * pos] : mine;
     if (fill) {
-      int64_t ids[3];
-      triple_ids(s, pos, ids);
       V g[3];
-      bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
+      triple_gradients(s, pos, z, g);
       kept_bend(width_t_[pos] * k_slope_t_[pos] / rest_t_[pos], g, kg);
     }
     const int32_t* l = &lo_t_[3 * pos];
@@ -159,11 +157,8 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     double mine[kKgCell];
     double* kg = keep_ ? &kg_s_[kKgCell * pos] : mine;
     if (fill) {
-      int64_t ids[4];
-      cell_ids(s, pos, ids);
-      const CellAt a = cell_at(ids, z);
       V g[4];
-      shear_cell<double, false>(a.x, g);
+      cell_gradients(s, pos, z, g);
       kept_gradients(area_s_[pos] * k_slope_s_[pos], g, 4, kg);
     }
     const int32_t* l = &lo_s_[4 * pos];
@@ -210,6 +205,33 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     gather_vector(row, out);
   }, 1.0, 0.0);
   kg_ready_ = true;
+}
+
+void Evaluator::triple_gradients(int64_t s, int64_t pos, const double* z, V g[3]) const {
+  int64_t ids[3];
+  triple_ids(s, pos, ids);
+  bend_gradient(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
+}
+
+void Evaluator::cell_gradients(int64_t s, int64_t pos, const double* z, V g[4]) const {
+  int64_t ids[4];
+  cell_ids(s, pos, ids);
+  const CellAt a = cell_at(ids, z);
+  shear_cell<double, false>(a.x, g);
+}
+
+void Evaluator::element_gradients(int kind, int64_t pos, const double* z, V* computed, V* kept) const {
+  const bool triple = kind == 1;
+  const ActiveList& own = triple ? lists_.triples : lists_.shears;
+  const ActiveList& ring = triple ? lists_.ring_triples : lists_.ring_shears;
+  const int64_t s = pos < own.size() ? own.items[size_t(pos)] : ring.items[size_t(pos - own.size())];
+  if (triple) {
+    triple_gradients(s, pos, z, computed);
+    for (int k = 0; k < 3; ++k) kept[k] = kept_bend_gradient(&kg_t_[size_t(kKgTriple) * pos], k);
+  } else {
+    cell_gradients(s, pos, z, computed);
+    for (int k = 0; k < 4; ++k) kept[k] = kept_cell_gradient(&kg_s_[size_t(kKgCell) * pos], k);
+  }
 }
 
 // An edge's direction and length come from z in every product, keeping or
