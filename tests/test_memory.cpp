@@ -200,7 +200,7 @@ TEST(Memory, OnlyTheNamedArraysFollowTheGrid) {
                                                         : "NewtonSolver: d, r, s, diagonal (compact); p, K p (own numbering)";
     for (const char* must : {"Evaluator: residual", "Evaluator: particles' Newton costs",
                              "Evaluator: hanging particles' forces and results",
-                             "Evaluator: rest geometry (lengths, widths, areas)",
+                             "Evaluator: rest geometry (lengths, widths)",
                              "TimeLoop: saved unknowns (a step's retry)", solver_row})
       EXPECT_GT(finest.at(must), 0u) << to_string(method) << ": " << must << ": not checked";
     EXPECT_GE(checked, 10) << to_string(method);

@@ -202,7 +202,7 @@ void Evaluator::memory(MemoryTable& t) const {
         local_.bytes() + (hang_lo_.capacity() + halo_send_.capacity() + halo_recv_.capacity()) * sizeof(int32_t));
   t.add(o, "hanging particles' results (own numbering)", hpend_lo_);
   t.add(o, "bending axes", axis_t_);
-  t.add(o, "rest geometry (lengths, widths, areas)", sum({&rest_e_, &width_e_, &width_t_}));
+  t.add(o, "rest geometry (lengths, widths)", sum({&rest_e_, &width_e_, &width_t_}));
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
   t.add(o, "hanging particles' forces and results",
