@@ -154,6 +154,16 @@ class Evaluator {
     const int64_t pos = position_of(0, s);
     return pos >= 0 ? rest_e_[size_t(pos)] : std::nan("");
   }
+  // Triple slot s's rest length and cell slot s's area as the kernels
+  // compute them (from the neighbours in list order); NaN where s is in no list.
+  double triple_rest_of(int64_t s) const {
+    const int64_t pos = position_of(1, s);
+    return pos >= 0 ? triple_rest(s, pos) : std::nan("");
+  }
+  double cell_area_of(int64_t s) const {
+    const int64_t pos = position_of(2, s);
+    return pos >= 0 ? cell_area_at(s, pos) : std::nan("");
+  }
   // Triple slot s's axis (3 values), nullptr where s is in no list.
   const double* bend_axis(int64_t s) const {
     const int64_t pos = position_of(1, s);
