@@ -775,6 +775,30 @@ TEST(GridSequence, StretchedEdgesEaseBackToTheirRestLength) {
   EXPECT_DOUBLE_EQ(ev.edge_rest(right), h);
 }
 
+// On an AMRC mesh the evaluator's triples' rest lengths and cells' areas,
+// computed from the neighbours it holds in list order, are the mesh's to the
+// bit (topology.hpp), at every listed element.
+TEST(AmrcMesh, EvaluatorRestGeometryIsTheMeshs) {
+  Simulation w(flat_scene(13, 11, 0.12, 0.10), test_fabric());
+  w.set_tree(mixed_tree());
+  w.rebuild();
+  const Cloth& c = w.cloth;
+  Evaluator& ev = w.loop->evaluator();
+  ev.edge_rest_lengths();  // lays the rows out for the lists now
+  int64_t triples = 0, cells = 0;
+  for (int64_t s : w.lists.triples.items) {
+    EXPECT_EQ(ev.triple_rest_of(s), triple_rest_geometry(c, s).rest) << "triple slot " << s;
+    ++triples;
+  }
+  for (int64_t s : w.lists.shears.items) {
+    EXPECT_EQ(ev.cell_area_of(s), cell_area(c, s)) << "cell slot " << s;
+    ++cells;
+  }
+  EXPECT_GT(triples, 0);
+  EXPECT_LT(cells, 120) << "the mesh should have coarse leaves";
+  EXPECT_GT(cells, 0);
+}
+
 // Uniform levels keep the finest mesh's mass, and every finer mesh starts on
 // the coarser one's surface with its forces: an affine cloth stays affine,
 // a uniform tension stays uniform, through levels 2, 1 and 0.

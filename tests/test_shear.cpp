@@ -85,6 +85,36 @@ TEST_P(ShearCells, AUniformShearReadsTheSameInEveryCell) {
   }
 }
 
+// The evaluator holds no triple's rest length nor cell's area: it computes
+// them from the neighbours it keeps in list order (a triple's previous and
+// next particles, a cell's corners 1 and 2). They must be the mesh's to the
+// bit, on coarse leaves too, or the states' checksums move.
+TEST_P(ShearCells, RestGeometryFromTheNeighboursAlone) {
+  const auto world = mixed_world(GetParam());
+  const Cloth& c = world->cloth;
+  const Grid& g = c.grid;
+  int64_t triples = 0;
+  for (int64_t s = 0; s < 2 * g.n(); ++s) {
+    if (!c.triple_on[s]) continue;
+    ++triples;
+    const int d = int(s & 1);
+    const int64_t p = s >> 1;
+    const double rest = triple_rest_length(g, d, c.prev[d][p], p, c.next[d][p]);
+    EXPECT_EQ(rest, triple_rest_geometry(c, s).rest) << "triple slot " << s;
+    // Half the gaps to both neighbours: the spacing on the finest mesh.
+    EXPECT_NEAR(rest, 0.5 * double(c.next[d][p] - c.prev[d][p]) / g.stride(d) * g.h(d), 1e-15) << s;
+  }
+  EXPECT_GT(triples, 0);
+  for (int64_t s = 0; s < g.n(); ++s) {
+    if (!c.shear_on[s]) continue;
+    const double area = cell_area(g, s, c.cell_at(0, s), c.cell_at(1, s));
+    EXPECT_EQ(area, cell_area(c, s)) << "cell slot " << s;
+    // The leaf's sides along i and j.
+    const double sides = (g.i_of(c.cell_at(0, s)) - g.i_of(s)) * g.hi * ((g.j_of(c.cell_at(1, s)) - g.j_of(s)) * g.hj);
+    EXPECT_NEAR(area, sides, 1e-15) << "cell slot " << s;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(FinestAndAmrc, ShearCells, ::testing::Values(false, true),
                          [](const auto& info) { return info.param ? "amrc" : "finest"; });
 

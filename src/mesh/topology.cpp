@@ -86,10 +86,9 @@ void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
 namespace {
 // Half the rest distance to each active neighbour along d: the extent of cloth a particle stands for.
 double extent(const Cloth& c, int64_t p, int d) {
-  const int64_t st = c.grid.stride(d);
   double e = 0;
-  if (c.next[d][p] >= 0) e += 0.5 * double(c.next[d][p] - p) / st;
-  if (c.prev[d][p] >= 0) e += 0.5 * double(p - c.prev[d][p]) / st;
+  if (c.next[d][p] >= 0) e += half_gap(c.grid, d, p, c.next[d][p]);
+  if (c.prev[d][p] >= 0) e += half_gap(c.grid, d, c.prev[d][p], p);
   return e * c.grid.h(d);
 }
 
@@ -144,8 +143,7 @@ RestGeometry triple_rest_geometry(const Cloth& c, int64_t s) {
 
 // A cell stands for its own area.
 double cell_area(const Cloth& c, int64_t s) {
-  const Grid& g = c.grid;
-  return double(c.cell_at(0, s) - s) / g.nj * g.hi * double(c.cell_at(1, s) - s) * g.hj;
+  return cell_area(c.grid, s, c.cell_at(0, s), c.cell_at(1, s));
 }
 
 }  // namespace drape

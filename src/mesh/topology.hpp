@@ -29,4 +29,18 @@ struct RestGeometry {
 RestGeometry edge_rest_geometry(const Cloth& c, int64_t s);
 RestGeometry triple_rest_geometry(const Cloth& c, int64_t s);
 double cell_area(const Cloth& c, int64_t s);
+
+// Half the rest distance from particle a to particle b (b after a) along d,
+// in units of the spacing: extents and rest lengths add these.
+inline double half_gap(const Grid& g, int d, int64_t a, int64_t b) { return 0.5 * double(b - a) / g.stride(d); }
+// A triple's rest length from its particle p and its neighbours prev and
+// next along d alone (the same arithmetic as triple_rest_geometry's): the
+// evaluator recomputes it from the neighbours it holds instead of keeping it.
+inline double triple_rest_length(const Grid& g, int d, int64_t prev, int64_t p, int64_t next) {
+  return (half_gap(g, d, p, next) + half_gap(g, d, prev, p)) * g.h(d);
+}
+// A cell's area from its slot s and its corners 0 (along i) and 1 (along j).
+inline double cell_area(const Grid& g, int64_t s, int64_t corner0, int64_t corner1) {
+  return double(corner0 - s) / g.nj * g.hi * double(corner1 - s) * g.hj;
+}
 }  // namespace drape

@@ -73,13 +73,13 @@ int64_t Evaluator::kink_tangents() {
   const int64_t nt = lists_.triples.size() + lists_.ring_triples.size();
   for (int64_t pos = 0; pos < nt; ++pos)
     if (active_.secant(1, pos, &s)) {
-      kg_t_[kKgTriple * pos] = width_t_[pos] * s / rest_t_[pos];
+      kg_t_[kKgTriple * pos] = width_t_[pos] * s / triple_rest(slot_at(lists_.triples, lists_.ring_triples, pos), pos);
       ++changed;
     }
   const int64_t ns = lists_.shears.size() + lists_.ring_shears.size();
   for (int64_t pos = 0; pos < ns; ++pos)
     if (active_.secant(2, pos, &s)) {
-      kg_s_[kKgCell * pos] = area_s_[pos] * s;
+      kg_s_[kKgCell * pos] = cell_area_at(slot_at(lists_.shears, lists_.ring_shears, pos), pos) * s;
       ++changed;
     }
   return changed;

@@ -137,8 +137,7 @@ void Evaluator::fit_arrays(bool exact) {
   fit_keeping(anc_s_, ns, ms, exact, 0.0);
   // The rest geometry too (its edges' eased rest lengths are state).
   for (auto* v : {&rest_e_, &width_e_}) fit_keeping(*v, ne, me, exact, 0.0);
-  for (auto* v : {&rest_t_, &width_t_}) fit_keeping(*v, nt, mt, exact, 0.0);
-  for (auto* v : {&area_s_, &root_s_}) fit_keeping(*v, ns, ms, exact, 0.0);
+  fit_keeping(width_t_, nt, mt, exact, 0.0);
   active_.fit(0, ne, me, exact);
   active_.fit(1, nt, mt, exact);
   active_.fit(2, ns, ms, exact);
@@ -203,7 +202,7 @@ void Evaluator::memory(MemoryTable& t) const {
         local_.bytes() + (hang_lo_.capacity() + halo_send_.capacity() + halo_recv_.capacity()) * sizeof(int32_t));
   t.add(o, "hanging particles' results (own numbering)", hpend_lo_);
   t.add(o, "bending axes", axis_t_);
-  t.add(o, "rest geometry (lengths, widths, areas)", sum({&rest_e_, &width_e_, &rest_t_, &width_t_, &area_s_, &root_s_}));
+  t.add(o, "rest geometry (lengths, widths)", sum({&rest_e_, &width_e_, &width_t_}));
   t.add(o, "band anchors (step-start forces)", sum({&anc_e_, &anc_t_, &anc_s_}));
   if (active_.enabled()) t.add(o, "band branches at z and a trial (kinks' active set)", active_.bytes());
   t.add(o, "hanging particles' forces and results",
@@ -348,13 +347,7 @@ void Evaluator::lay_out_rest() {
     width_e_[pos] = r.width;
   });
   for_triples([&](int64_t s, int64_t pos) {
-    const RestGeometry r = triple_rest_geometry(c_, s);
-    rest_t_[pos] = r.rest;
-    width_t_[pos] = r.width;
-  });
-  for_shears([&](int64_t s, int64_t pos) {
-    area_s_[pos] = cell_area(c_, s);
-    root_s_[pos] = std::sqrt(area_s_[pos]);
+    width_t_[pos] = triple_rest_geometry(c_, s).width;
   });
 }
 
@@ -615,7 +608,9 @@ void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], 
                              double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
-  const D4 Lm = loadu4(&rest_t_[pos]), w = loadu4(&width_t_[pos]);
+  double rest[4];
+  for (int l = 0; l < 4; ++l) rest[l] = triple_rest(s[l], pos + l);
+  const D4 Lm = loadu4(rest), w = loadu4(&width_t_[pos]);
   const D4 q = loadu4(th) / Lm;
   double rev[4], f[4];
   for (int l = 0; l < 4; ++l) rev[l] = m_.bend[s[l] & 1].reversal();
@@ -680,7 +675,7 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
 
 void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], const double* z, double* settle) {
   const int d = int(s & 1);
-  const double Lm = rest_t_[pos], w = width_t_[pos];
+  const double Lm = triple_rest(s, pos), w = width_t_[pos];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   active_.note(1, pos, th / Lm, bv, st);
@@ -706,7 +701,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
-  const double A = area_s_[pos];
+  const double A = cell_area_at(s, pos);
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   active_.note(2, pos, phi, bv, st);
@@ -717,7 +712,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   else
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], g[k], f * A);
   const BandExcess ex = m_.use_shear ? Band::excess(f, bv) : BandExcess{};
-  const double lam = A / (root_s_[pos] * m_.force_scale);
+  const double lam = A / (std::sqrt(A) * m_.force_scale);
   const double sigma = ex.r * lam, mem = (f - st.f) * lam;
   cost_s_[pos] = 0.5 * (sigma * sigma + m_.memory * mem * mem);
   if (!gq_s_.empty()) {  // a gradient's slopes (evaluate with one)
@@ -752,7 +747,12 @@ void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], 
                             double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
-  const D4 A = loadu4(&area_s_[pos]), rest = loadu4(&root_s_[pos]);
+  double area[4], root[4];
+  for (int l = 0; l < 4; ++l) {
+    area[l] = cell_area_at(s[l], pos + l);
+    root[l] = std::sqrt(area[l]);
+  }
+  const D4 A = loadu4(area), rest = loadu4(root);
   const int64_t one[4] = {0, 0, 0, 0};  // one band for every cell
   const BandFour b4 = bands_four(m_.shear, m_.shear, one, loadu4(phi));
   const StopFour st = band_stop4(loadu4(&anc_s_[pos]), splat4(m_.shear.reversal()), b4);
@@ -899,7 +899,7 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[4], hr[4];
   shear_cell_hv(a.x, r, g, hr);
-  const double A = area_s_[pos], f = z[c_.force_index(2, s)];
+  const double A = cell_area_at(s, pos), f = z[c_.force_index(2, s)];
   const double fa = f * A / m_.force_scale, gq = gq_s_[pos];
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
@@ -941,7 +941,9 @@ void Evaluator::shear_gradient_four(const ItemRun& run, int64_t k, const double*
     R[c] = lanes4(r[c]);
   }
   shear_cells_hv_four(X, R, G, H);
-  const D4 A = loadu4(&area_s_[pos]), scale = splat4(m_.force_scale);
+  double area[4];
+  for (int l = 0; l < 4; ++l) area[l] = cell_area_at(s[l], pos + l);
+  const D4 A = loadu4(area), scale = splat4(m_.force_scale);
   const D4 fa = loadu4(f) * A / scale, gq = loadu4(&gq_s_[pos]);
   D4 gr = splat4(0.0);
   V4 out[4];
@@ -1321,7 +1323,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     V g[3];
     const V n = load3<double>(&axis_t_[3 * pos]);
     const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
-    const double Lm = rest_t_[pos], w = width_t_[pos], f = z[c_.force_index(1, s)];
+    const double Lm = triple_rest(s, pos), w = width_t_[pos], f = z[c_.force_index(1, s)];
     const double slope =
         band_slope(anc_t_[pos], m_.bend[d], f, th / Lm) * w / (Lm * Lm);
     double nf = 0;
@@ -1341,7 +1343,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     const CellAt a = cell_at(ids, z);
     V g[4];
     const double phi = shear_cell(a.x, g);
-    const double A = area_s_[pos], Lr = root_s_[pos], f = z[c_.force_index(2, s)];
+    const double A = cell_area_at(s, pos), Lr = std::sqrt(A), f = z[c_.force_index(2, s)];
     const double slope = band_slope(anc_s_[pos], m_.shear, f, phi) * A / Lr;
     double nf = 0;
     for (int k = 0; k < 4; ++k) {
@@ -1440,8 +1442,11 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   // An element's position in its list is its index there (this rank's own).
   const std::vector<int64_t>&e = lists_.edges.items, &t = lists_.triples.items, &c = lists_.shears.items;
   for (size_t k = 0; k < e.size(); ++k) diff(c_.force_index(0, e[k]), e[k] >> 1, F0 / width_e_[k]);
-  for (size_t k = 0; k < t.size(); ++k) diff(c_.force_index(1, t[k]), t[k] >> 1, F0 * rest_t_[k] / width_t_[k]);
-  for (size_t k = 0; k < c.size(); ++k) diff(c_.force_index(2, c[k]), c[k], F0 * root_s_[k] / area_s_[k]);
+  for (size_t k = 0; k < t.size(); ++k) diff(c_.force_index(1, t[k]), t[k] >> 1, F0 * triple_rest(t[k], int64_t(k)) / width_t_[k]);
+  for (size_t k = 0; k < c.size(); ++k) {
+    const double A = cell_area_at(c[k], int64_t(k));
+    diff(c_.force_index(2, c[k]), c[k], F0 * std::sqrt(A) / A);
+  }
   // Leave the buffers as evaluate() would have: at z.
   evaluate(z, nullptr);
   return cost;

@@ -18,6 +18,7 @@
 
 #include "mesh/active_lists.hpp"
 #include "mesh/cloth.hpp"
+#include "mesh/topology.hpp"
 #include "solver/band_active_set.hpp"
 #include "solver/elements/edge_K.hpp"
 #include "solver/elements/kept_K.hpp"
@@ -159,6 +160,16 @@ class Evaluator {
   double edge_rest(int64_t s) const {
     const int64_t pos = position_of(0, s);
     return pos >= 0 ? rest_e_[size_t(pos)] : std::nan("");
+  }
+  // Triple slot s's rest length and cell slot s's area as the kernels
+  // compute them (from the neighbours in list order); NaN where s is in no list.
+  double triple_rest_of(int64_t s) const {
+    const int64_t pos = position_of(1, s);
+    return pos >= 0 ? triple_rest(s, pos) : std::nan("");
+  }
+  double cell_area_of(int64_t s) const {
+    const int64_t pos = position_of(2, s);
+    return pos >= 0 ? cell_area_at(s, pos) : std::nan("");
   }
   // Triple slot s's axis (3 values), nullptr where s is in no list.
   const double* bend_axis(int64_t s) const {
@@ -641,12 +652,25 @@ class Evaluator {
   // Each triple's bending axis (3 doubles), in list order too.
   std::vector<double> axis_t_;
   // Each element's rest geometry (mesh/topology.hpp), in list order too:
-  // edges' and triples' rest lengths and widths, cells' areas and their
-  // square roots. Laid out when the lists change (rest_stamp_ their stamp),
-  // kept until then: grid sequencing eases edges' rest lengths in between.
-  std::vector<double> rest_e_, width_e_, rest_t_, width_t_, area_s_, root_s_;
+  // edges' rest lengths and widths, triples' widths. Laid out when the lists
+  // change (rest_stamp_ their stamp), kept until then: grid sequencing eases
+  // edges' rest lengths in between. A triple's rest length and a cell's area
+  // are computed from the neighbours held (nb_t_, nb_s_), exactly as the
+  // mesh computes them: 24 bytes a particle fewer, a few operations more.
+  std::vector<double> rest_e_, width_e_, width_t_;
   uint64_t rest_stamp_ = 0;
   void lay_out_rest();
+  double triple_rest(int64_t s, int64_t pos) const {
+    const size_t i = 2 * size_t(pos);
+    return triple_rest_length(c_.grid, int(s & 1), nb_t_[i], s >> 1, nb_t_[i + 1]);
+  }
+  // The slot at an element's position (the ring's after the owned).
+  static int64_t slot_at(const ActiveList& own, const ActiveList& ring, int64_t pos) {
+    return pos < own.size() ? own.items[size_t(pos)] : ring.items[size_t(pos - own.size())];
+  }
+  double cell_area_at(int64_t s, int64_t pos) const {
+    return cell_area(c_.grid, s, nb_s_[3 * size_t(pos)], nb_s_[3 * size_t(pos) + 1]);
+  }
   // Each element's band anchor (hysteresis_anchors), in list order too.
   std::vector<double> anc_e_, anc_t_, anc_s_;
   BandActiveSet active_;  // the elements' branches (off unless track_branches)

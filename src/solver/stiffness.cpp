@@ -45,7 +45,7 @@ double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos, c
   int64_t ids[3];
   triple_ids(s, pos, ids);
   for (int64_t& id : ids) id = slot_in(slot, id);
-  return triple_curvature(x, ids, &axis_t_[3 * pos], rest_t_[pos]);
+  return triple_curvature(x, ids, &axis_t_[3 * pos], triple_rest(s, pos));
 }
 double Evaluator::shear_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot) const {
   int64_t ids[4];
@@ -141,7 +141,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     if (fill) {
       V g[3];
       triple_gradients(s, pos, z, g);
-      kept_bend(width_t_[pos] * k_slope_t_[pos] / rest_t_[pos], g, kg);
+      kept_bend(width_t_[pos] * k_slope_t_[pos] / triple_rest(s, pos), g, kg);
     }
     const int32_t* l = &lo_t_[3 * pos];
     const V vk[3] = {at(v, l[0]), at(v, l[1]), at(v, l[2])};
@@ -159,7 +159,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     if (fill) {
       V g[4];
       cell_gradients(s, pos, z, g);
-      kept_gradients(area_s_[pos] * k_slope_s_[pos], g, 4, kg);
+      kept_gradients(cell_area_at(s, pos) * k_slope_s_[pos], g, 4, kg);
     }
     const int32_t* l = &lo_s_[4 * pos];
     const V vk[4] = {at(v, l[0]), at(v, l[1]), at(v, l[2]), at(v, l[3])};
@@ -291,7 +291,7 @@ void Evaluator::triple_numbers(int64_t s, int64_t pos, const double* z, double* 
   V g[3];
   const double th =
       bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), load3<double>(&axis_t_[3 * pos]), g);
-  const double Lm = rest_t_[pos];
+  const double Lm = triple_rest(s, pos);
   const double slope = m_.bend[s & 1].stop(anc_t_[pos], th / Lm).df_dq;
   if (!keep_) k_slope_t_[pos] = slope;
   kept_bend(width_t_[pos] * slope / Lm, g, kg);
@@ -305,7 +305,7 @@ void Evaluator::shear_numbers(int64_t s, int64_t pos, const double* z, double* k
   const double phi = shear_cell(a.x, g);
   const double slope = m_.shear.stop(anc_s_[pos], phi).df_dq;
   if (!keep_) k_slope_s_[pos] = slope;
-  kept_gradients(area_s_[pos] * slope, g, 4, kg);
+  kept_gradients(cell_area_at(s, pos) * slope, g, 4, kg);
 }
 
 // The diagonal of K: per element and particle, its stiffness block's
