@@ -229,15 +229,6 @@ void DividedLevel::finest_smoother(const Reducer& red, const BlockMatrix& mine, 
   ch_ = &cheb_;
 }
 
-namespace {
-// Sum of squares in order: the one-rank power iteration's norm.
-double norm2(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
-  return s;
-}
-}  // namespace
-
 // Chebyshev::setup's power iteration on D^-1 K, on this rank's rows: the
 // same steps, each product's ghost entries exchanged, each norm over the
 // vector gathered whole (one rank's order of the sum).
@@ -254,7 +245,7 @@ void DividedLevel::power_iteration(const Reducer& red, RankRows& rr, const Block
   auto gathered_norm2 = [&]() {
     rr.gather(red, eig_.data(), eig_all_.data());
     build_bytes_ += rr.vector_bytes();
-    return norm2(eig_all_);
+    return ordered_norm2(eig_all_);
   };
   double lam = 1, n2 = gathered_norm2();
   double* x = x_.data();

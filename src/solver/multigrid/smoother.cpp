@@ -5,15 +5,6 @@
 
 namespace drape {
 
-namespace {
-// Sum of squares in a fixed order (thread count does not matter).
-double norm2(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
-  return s;
-}
-}  // namespace
-
 void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
   degree_ = degree;
   const int64_t n = A.rows;
@@ -41,12 +32,12 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
   }
   double lam = 1;
   for (int it = 0; it < steps; ++it) {
-    const double nd = std::sqrt(norm2(eig_));
+    const double nd = std::sqrt(ordered_norm2(eig_));
     if (!(nd > 0)) break;
     for (double& x : eig_) x /= nd;
     A.multiply(eig_.data(), r_.data());
     apply_dinv(n, [&](int64_t i) { return &dinv_[9 * i]; }, r_.data(), eig_.data());
-    lam = std::sqrt(norm2(eig_));
+    lam = std::sqrt(ordered_norm2(eig_));
   }
   set_spectrum(degree, ratio, lam);
 }

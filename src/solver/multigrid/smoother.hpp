@@ -14,6 +14,14 @@
 
 namespace drape {
 
+// Sum of squares in index order (thread and rank counts do not matter): the
+// power iteration's norm, one rank's or gathered whole.
+inline double ordered_norm2(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x * x;
+  return s;
+}
+
 class Chebyshev {
  public:
   // Inverse diagonal blocks and the spectrum's top, for A.
