@@ -30,7 +30,7 @@ before=$((split - 2)) stop=$((split + 3)) end=$((split + 12))
 OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --set amrc.last_level=1 --set solver.steps=$end --quiet --output "$work/ref"
 [[ $(report "$work/ref" 'r["stages"][1]["from_step"]') == "$split" ]] || fail "the reference split elsewhere"
 # 1 rank stops 2 steps before the split; 2 ranks go on from there (only
-# the last steps: oversubscribed ranks spin while they wait), split, stop 3 steps
+# the last steps, to keep the test short), split, stop 3 steps
 # later inside the window and write the checkpoint together; 1 rank x 2
 # threads go on from it.
 OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --set amrc.last_level=1 --set solver.steps=$before \
