@@ -34,6 +34,25 @@ namespace {
 
 int rank() { return rank_of(MPI_COMM_WORLD); }
 
+// body(comm) on the first `ranks` world ranks, comm a sub-communicator of them;
+// the other ranks skip it.
+template <class Body>
+void on_first_ranks(int ranks, Body&& body) {
+  MPI_Comm comm;
+  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
+  if (comm == MPI_COMM_NULL) return;
+  body(comm);
+  MPI_Comm_free(&comm);
+}
+
+// A quiet run writing into the test's scratch directory `name`.
+RunOptions quiet_run(const std::string& name) {
+  RunOptions opt;
+  opt.output_dir = std::string(DRAPE_TEST_TMP) + "/" + name;
+  opt.quiet = true;
+  return opt;
+}
+
 // A broadcast from rank 0 whose waiting ranks sleep between polls: a rank
 // left out of a run must not take the cores its threads spin on.
 void quiet_bcast(void* data, int count, MPI_Datatype type) {
@@ -72,19 +91,14 @@ int64_t pairs_in_contact(const Simulation& w) {
 // distances, AMRC adapting as the program does.
 Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = SolverMethod::Newton,
              double end = 0.06, bool amrc = false, Preconditioner pc = Preconditioner::Jacobi) {
-  MPI_Comm comm;
-  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
   Outcome out;
   char sum[40] = {0};
   int64_t counts[5] = {0, 0, 0, 0, 0};
-  if (comm != MPI_COMM_NULL) {
+  on_first_ranks(ranks, [&](MPI_Comm comm) {
     omp_set_num_threads(threads);
-    RunOptions opt;
-    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_" + std::to_string(ranks) +
-                     (self_contact ? "_on" : "_off") +
-                     (method == SolverMethod::Cg ? "_cg" : "") + (amrc ? "_amrc" : "") +
-                     (pc == Preconditioner::Multigrid ? "_mg" : "");
-    opt.quiet = true;
+    const RunOptions opt = quiet_run("mpi_self_contact_" + std::to_string(ranks) + (self_contact ? "_on" : "_off") +
+                                     (method == SolverMethod::Cg ? "_cg" : "") + (amrc ? "_amrc" : "") +
+                                     (pc == Preconditioner::Multigrid ? "_mg" : ""));
     Scene scene = amrc ? wide_strip_scene(self_contact) : strip_scene(self_contact);
     scene.solver.method = method;
     scene.solver.preconditioner = pc;
@@ -104,8 +118,7 @@ Outcome drop(int ranks, int threads, bool self_contact, SolverMethod method = So
     counts[3] = w.summary().refined_near;
     counts[4] = w.loop->newton().multigrid_builds();
     omp_set_num_threads(1);
-    MPI_Comm_free(&comm);
-  }
+  });
   quiet_bcast(sum, sizeof sum, MPI_CHAR);
   quiet_bcast(counts, 5, MPI_INT64_T);
   out.checksum = sum;
@@ -202,14 +215,9 @@ Evaluator& press(Simulation& w) {
 // self-contact part reads the partners' residuals, which contact ghosts get
 // with the residuals' exchange. Every rank gets rank 0's digest.
 std::string pressed_gradient(int ranks) {
-  MPI_Comm comm;
-  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
   char sum[40] = {0};
-  if (comm != MPI_COMM_NULL) {
-    RunOptions opt;
-    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_grad_" + std::to_string(ranks);
-    opt.quiet = true;
-    Simulation w(strip_scene(true), test_fabric(), opt, comm);
+  on_first_ranks(ranks, [&](MPI_Comm comm) {
+    Simulation w(strip_scene(true), test_fabric(), quiet_run("mpi_self_contact_grad_" + std::to_string(ranks)), comm);
     Evaluator& ev = press(w);
     std::vector<double> grad(w.cloth.z.size());
     ev.evaluate(w.cloth.z.data(), grad.data());
@@ -221,8 +229,7 @@ std::string pressed_gradient(int ranks) {
     }
     const std::string hex = std::to_string(w.red().sum_u64(h)) + "/" + std::to_string(w.red().sum_i64(pairs_in_contact(w)));
     hex.copy(sum, sizeof sum - 1);
-    MPI_Comm_free(&comm);
-  }
+  });
   quiet_bcast(sum, sizeof sum, MPI_CHAR);
   return sum;
 }
@@ -262,15 +269,10 @@ int64_t contact_ghost_blocks(const BlockMatrix& mine, const RankRows& rr, const 
 }
 
 Gathered pressed_stiffness(int ranks) {
-  MPI_Comm comm;
-  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
   Gathered out;
   int64_t counts[2] = {0, 0};
-  if (comm != MPI_COMM_NULL) {
-    RunOptions opt;
-    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_K_" + std::to_string(ranks);
-    opt.quiet = true;
-    Simulation w(strip_scene(true), test_fabric(), opt, comm);
+  on_first_ranks(ranks, [&](MPI_Comm comm) {
+    Simulation w(strip_scene(true), test_fabric(), quiet_run("mpi_self_contact_K_" + std::to_string(ranks)), comm);
     Evaluator& ev = press(w);
     ev.evaluate(w.cloth.z.data(), nullptr);  // Newton's order: the settled cost, then the diagonal
     std::vector<double> diag(w.cloth.z.size());
@@ -288,8 +290,7 @@ Gathered pressed_stiffness(int ranks) {
       counts[0] = w.red().sum_i64(contact_ghost_blocks(mine, rr, ev.self_contact()));
     }
     counts[1] = w.red().sum_i64(pairs_in_contact(w));
-    MPI_Comm_free(&comm);
-  }
+  });
   quiet_bcast(counts, 2, MPI_INT64_T);
   out.ghost_blocks = counts[0];
   out.in_contact = counts[1];
@@ -355,14 +356,9 @@ int64_t matrix_differ(const BlockMatrix& a, const BlockMatrix& b) {
 }
 
 Divided divided_cycle(int ranks, const MultigridSettings& ms) {
-  MPI_Comm comm;
-  MPI_Comm_split(MPI_COMM_WORLD, rank() < ranks ? 0 : MPI_UNDEFINED, rank(), &comm);
   int64_t counts[9] = {0, 0, 0, 0, -1, -1, 0, 0, 0};
-  if (comm != MPI_COMM_NULL) {
-    RunOptions opt;
-    opt.output_dir = std::string(DRAPE_TEST_TMP) + "/mpi_self_contact_divided_" + std::to_string(ranks);
-    opt.quiet = true;
-    Simulation w(strip_scene(true), test_fabric(), opt, comm);
+  on_first_ranks(ranks, [&](MPI_Comm comm) {
+    Simulation w(strip_scene(true), test_fabric(), quiet_run("mpi_self_contact_divided_" + std::to_string(ranks)), comm);
     Evaluator& ev = press(w);
     ev.evaluate(w.cloth.z.data(), nullptr);
     std::vector<double> diag(w.cloth.z.size());
@@ -421,8 +417,7 @@ Divided divided_cycle(int ranks, const MultigridSettings& ms) {
       counts[8] = int64_t(red.max(double(rr.matrix_bytes())));
       if (one.rows == 0) counts[5] += 1000000;  // a rank without level-1 rows covers nothing
     }
-    MPI_Comm_free(&comm);
-  }
+  });
   quiet_bcast(counts, 9, MPI_INT64_T);
   return {counts[0], counts[1], counts[2], counts[3], counts[4], counts[5], counts[6], counts[7], counts[8]};
 }
