@@ -29,7 +29,7 @@ void SelfContact::fit_to_lists(const ActiveList& particles, int64_t n, bool exac
 
 void SelfContact::fit_hash(int64_t hashed, int64_t n, bool exact) {
   int64_t buckets = 1;
-  while (buckets < 2 * hashed) buckets *= 2;  // a power of two: the hash masks
+  while (buckets < hashed) buckets *= 2;  // a power of two (the hash masks), about one a particle
   fit(bucket_start_, size_t(buckets + 1), size_t(4 * n + 1), exact, int32_t(0));
   fit(bucket_items_, size_t(hashed), size_t(n), exact, int32_t(0));
 }
@@ -102,10 +102,11 @@ int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
 // the thread count (and the partners are sorted after anyway).
 void SelfContact::hash_particles() {
   // Buckets for these particles (a coarse stage has far fewer than the
-  // grid the arrays were sized for): a power of two, at least twice them.
+  // grid the arrays were sized for): a power of two, at least as many
+  // (the partners are sorted after: the same lists whatever the buckets).
   const int64_t hashed = own_ + int64_t(ghosts_.size());
   buckets_ = 1;
-  while (buckets_ < 2 * hashed) buckets_ *= 2;
+  while (buckets_ < hashed) buckets_ *= 2;
   int32_t* start = bucket_start_.data();
   std::fill(start, start + buckets_ + 1, 0);
   int64_t cell[3];
