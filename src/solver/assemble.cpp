@@ -124,7 +124,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
         if (at[k] >= 0) {
           const int64_t pos = at[k] / kEdgeEntry, part = k;  // place 0: its first end
           const int64_t s = slot_at(lists_.edges, lists_.ring_edges, pos);
-          const int64_t ends[2] = {s >> 1, nb_e_[pos]};
+          const int64_t ends[2] = {s >> 1, edge_far(pos)};
           const EdgeStiffness ke = edge_stiffness_at(s, pos, k_z_);
           const double iv = 1.0 / ke.length;
           const double u[3] = {ke.e.x * iv, ke.e.y * iv, ke.e.z * iv};

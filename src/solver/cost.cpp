@@ -123,9 +123,12 @@ void Evaluator::fit_arrays(bool exact) {
   each(rho_, np, 3, n, 0.0);
   each(cost_p_, np, 1, n, 0.0);
   each(nb_e_, ne, 1, me, int32_t(-1));
-  each(nb_t_, nt, 2, mt, int32_t(-1));
-  each(nb_s_, ns, 3, ms, int32_t(-1));
-  if (local_on_) fit_local_tables(exact);
+  if (local_on_) {  // the triples' and cells' local indices name their neighbours
+    fit_local_tables(exact);
+  } else {
+    each(nb_t_, nt, 2, mt, int32_t(-1));
+    each(nb_s_, ns, 3, ms, int32_t(-1));
+  }
   // Self-contact's arrays from its first build on (none before: a mesh that
   // is never stepped holds none).
   if (m_.self_contact && self_.builds() > 0) self_.fit_to_lists(lists_.particles, int64_t(n), exact);
@@ -308,20 +311,7 @@ void Evaluator::build_rows() {
   for (const ActiveList* r : {&lists_.ring_edges, &lists_.ring_triples, &lists_.ring_shears})
     if (!std::is_sorted(r->items.begin(), r->items.end()))
       throw std::logic_error("Evaluator: the ring's slots are not in ascending order");
-  // Each element's neighbours, at its position (the ring's after the owned).
-  auto place = [](const ActiveList& own, const ActiveList& ring, auto&& ends) {
-    for (int64_t k = 0; k < own.size(); ++k) ends(own.items[k], k);
-    for (int64_t k = 0; k < ring.size(); ++k) ends(ring.items[k], own.size() + k);
-  };
-  place(lists_.edges, lists_.ring_edges,
-        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
-  place(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
-    nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
-    nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
-  });
-  place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
-    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell_at(k, s));
-  });
+  place_neighbours();
   const ActiveList& pl = lists_.particles;
   // Each thread walks the lists beside its run of the particle list.
   int unlisted = 0;
@@ -334,6 +324,24 @@ void Evaluator::build_rows() {
   if (unlisted > 0) throw std::logic_error("Evaluator: an owned particle's element is in no active list");
   ListWalk walk(lists_, tiling_);
   for (size_t i = 0; i < lists_.hanging.size(); ++i) listed_row(lists_.hanging[i].h, rows_[pl.size() + i], walk);
+}
+
+// Each element's neighbours, at its position (the ring's after the owned).
+void Evaluator::place_neighbours() {
+  auto place = [](const ActiveList& own, const ActiveList& ring, auto&& ends) {
+    for (int64_t k = 0; k < own.size(); ++k) ends(own.items[k], k);
+    for (int64_t k = 0; k < ring.size(); ++k) ends(ring.items[k], own.size() + k);
+  };
+  place(lists_.edges, lists_.ring_edges,
+        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
+  if (local_on_) return;  // build_local, next in list_rows, numbers the triples' and cells'
+  place(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
+    nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
+    nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
+  });
+  place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
+    for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell_at(k, s));
+  });
 }
 
 // Once a list change: the mesh's rest geometry, each element's at its
@@ -354,6 +362,7 @@ void Evaluator::lay_out_rest() {
 void Evaluator::use_local() {
   if (local_on_) return;
   local_on_ = true;
+  for (auto* v : {&nb_t_, &nb_s_}) std::vector<int32_t>().swap(*v);  // the local tables name them now
   fit_local_tables(true);  // the lists' sizes, as the other arrays were at their first fit
   build_local(true);
 }
@@ -526,14 +535,14 @@ void Evaluator::freeze_bend_axes(const double* x1, const int32_t* slot) {
 
 void Evaluator::edge_forces(int64_t s, int64_t pos, const double* z, double* settle) {
   V g[2];
-  const double L = edge_length(at(z, s >> 1), at(z, nb_e_[pos]), g);
+  const double L = edge_length(at(z, s >> 1), at(z, edge_far(pos)), g);
   edge_band(s, pos, L, g, z, settle);
 }
 
 void Evaluator::edge_four(const ItemRun& run, int64_t k, const double* z, EdgeFour& e, int64_t ends[4][2]) const {
   for (int l = 0; l < 4; ++l) {
     ends[l][0] = run.items[k + l] >> 1;
-    ends[l][1] = nb_e_[run.base + k + l];
+    ends[l][1] = edge_far(run.base + k + l);
     e.a[l] = at(z, ends[l][0]);
     e.b[l] = at(z, ends[l][1]);
   }
@@ -561,7 +570,7 @@ void Evaluator::edge_forces(const ItemRun& run, const double* z, double* settle)
 void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const double* z, double* settle) {
   const int64_t p = s >> 1;
   const int d = int(s & 1);
-  const int64_t q = nb_e_[pos];
+  const int64_t q = edge_far(pos);
   const double L0 = rest_e_[pos], w = width_e_[pos];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
@@ -816,7 +825,7 @@ inline V residual_of(const Cloth& c, const std::vector<double>& rho, int64_t p) 
 
 void Evaluator::edge_gradient(int64_t s, int64_t pos, const double* z, double* grad) {
   const int64_t p = s >> 1;
-  const int64_t q = nb_e_[pos];
+  const int64_t q = edge_far(pos);
   const V ra = residual_of(c_, rho_grid_, p), rb = residual_of(c_, rho_grid_, q);
   V g[2], hv;
   edge_length_hv(at(z, p), at(z, q), rb - ra, g, hv);
@@ -1306,7 +1315,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
   for_edges([&](int64_t s, int64_t pos) {
     const int64_t p = s >> 1;
     const int d = int(s & 1);
-    const int64_t q = nb_e_[pos];
+    const int64_t q = edge_far(pos);
     V g[2];
     const double L = edge_length(at(z, p), at(z, q), g);
     const double L0 = rest_e_[pos], w = width_e_[pos], f = z[c_.force_index(0, s)];

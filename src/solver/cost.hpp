@@ -479,6 +479,7 @@ class Evaluator {
   // with `derive`, the axes and anchors where a list change left them stale).
   void list_rows(bool derive = true);
   void build_rows();
+  void place_neighbours();  // nb_e_ (and without local_on_ nb_t_, nb_s_) for the present lists
   bool axes_stale_ = false, anchors_stale_ = false;
   CostTerms reduce_costs();
   // reduce_costs' tile sums into partials_, inside a region; then the sum
@@ -602,7 +603,7 @@ class Evaluator {
   // the frozen tension and slope (kept, or K's frozen slopes and tensions).
   EdgeStiffness edge_stiffness_at(int64_t s, int64_t pos, const double* z) const {
     const EdgeStiffness f = edge_frozen(pos);
-    const int64_t p = s >> 1, q = nb_e_[size_t(pos)];
+    const int64_t p = s >> 1, q = edge_far(pos);
     return edge_stiffness(load3<double>(z + 3 * p), load3<double>(z + 3 * q), f.tension, f.slope_per_rest, f.width);
   }
   // Its frozen tension and slope / rest length and its width alone.
@@ -648,41 +649,60 @@ class Evaluator {
   // The neighbour tables' entries each element reads, in list order too:
   // an edge's far end, a triple's previous and next particles, a cell's
   // corners 1-3 (the tables' own lines are one per element on a coarse mesh).
+  // The triples' and cells' only while there is no own numbering
+  // (local_on_: a nonlinear CG run): with it, their local indices (lo_t_,
+  // lo_s_) name the same particles, their grid ids one lookup away (28 bytes
+  // a particle fewer in Newton's runs). The edges' stay: each product reads
+  // an edge's far end in z, and the lookup there costs it a tenth.
   std::vector<int32_t> nb_e_, nb_t_, nb_s_;
+  // The grid id of own-numbering index l: the free particles' come first,
+  // in the particle list's order.
+  int64_t local_id(int32_t l) const {
+    const ActiveList& pl = lists_.particles;
+    return l < pl.size() ? pl.items[size_t(l)] : local_.id_of(l);
+  }
+  // An edge's far end, a triple's previous (end 0) and next (end 1)
+  // particles, a cell's corner k + 1, of the element at pos.
+  int64_t edge_far(int64_t pos) const { return nb_e_[size_t(pos)]; }
+  int64_t triple_end(int64_t pos, int end) const {
+    return local_on_ ? local_id(lo_t_[3 * size_t(pos) + 2 * end]) : nb_t_[2 * size_t(pos) + end];
+  }
+  int64_t cell_corner(int64_t pos, int k) const {
+    return local_on_ ? local_id(lo_s_[4 * size_t(pos) + k + 1]) : nb_s_[3 * size_t(pos) + k];
+  }
   // Each triple's bending axis (3 doubles), in list order too.
   std::vector<double> axis_t_;
   // Each element's rest geometry (mesh/topology.hpp), in list order too:
   // edges' rest lengths and widths, triples' widths. Laid out when the lists
   // change (rest_stamp_ their stamp), kept until then: grid sequencing eases
   // edges' rest lengths in between. A triple's rest length and a cell's area
-  // are computed from the neighbours held (nb_t_, nb_s_), exactly as the
+  // are computed from the neighbours (triple_end, cell_corner), exactly as the
   // mesh computes them: 24 bytes a particle fewer, a few operations more.
   std::vector<double> rest_e_, width_e_, width_t_;
   uint64_t rest_stamp_ = 0;
   void lay_out_rest();
   double triple_rest(int64_t s, int64_t pos) const {
-    const size_t i = 2 * size_t(pos);
-    return triple_rest_length(c_.grid, int(s & 1), nb_t_[i], s >> 1, nb_t_[i + 1]);
+    return triple_rest_length(c_.grid, int(s & 1), triple_end(pos, 0), s >> 1, triple_end(pos, 1));
   }
   // The slot at an element's position (the ring's after the owned).
   static int64_t slot_at(const ActiveList& own, const ActiveList& ring, int64_t pos) {
     return pos < own.size() ? own.items[size_t(pos)] : ring.items[size_t(pos - own.size())];
   }
   double cell_area_at(int64_t s, int64_t pos) const {
-    return cell_area(c_.grid, s, nb_s_[3 * size_t(pos)], nb_s_[3 * size_t(pos) + 1]);
+    return cell_area(c_.grid, s, cell_corner(pos, 0), cell_corner(pos, 1));
   }
   // Each element's band anchor (hysteresis_anchors), in list order too.
   std::vector<double> anc_e_, anc_t_, anc_s_;
   BandActiveSet active_;  // the elements' branches (off unless track_branches)
   uint64_t derived_stamp_ = 0;  // the lists the axes and anchors were laid out for
   void triple_ids(int64_t s, int64_t pos, int64_t ids[3]) const {
-    ids[0] = nb_t_[2 * pos];
+    ids[0] = triple_end(pos, 0);
     ids[1] = s >> 1;
-    ids[2] = nb_t_[2 * pos + 1];
+    ids[2] = triple_end(pos, 1);
   }
   void cell_ids(int64_t s, int64_t pos, int64_t ids[4]) const {
     ids[0] = s;
-    for (int k = 0; k < 3; ++k) ids[k + 1] = nb_s_[3 * pos + k];
+    for (int k = 0; k < 3; ++k) ids[k + 1] = cell_corner(pos, k);
   }
   // A triple's and a cell's strain gradients at z, as the products that
   // keep nothing compute them.

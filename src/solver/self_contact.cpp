@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "solver/fit.hpp"
 
@@ -19,18 +20,16 @@ constexpr int64_t kReservedPartners = 4;
 void SelfContact::fit_to_lists(const ActiveList& particles, int64_t n, bool exact) {
   const size_t np = size_t(particles.size()), most = size_t(n);
   fit_keeping(xb_, 3 * np, 3 * most, exact, 0.0);
-  fit_keeping(first_, np, most, exact, int64_t(0));
-  fit_keeping(count_, np, most, exact, int32_t(0));
+  fit_keeping(first_, np + 1, most + 1, exact, int32_t(0));
   const size_t partners = std::max(size_t(listed_), size_t(kReservedPartners) * np);
-  fit_keeping(ids_, partners, size_t(kReservedPartners) * most, exact, int32_t(0));
-  fit_keeping(lo_, partners, size_t(kReservedPartners) * most, exact, int32_t(-1));
+  fit_keeping(partners_, partners, size_t(kReservedPartners) * most, exact, int32_t(0));
   if (exact) std::vector<double>().swap(gx_);  // the contact ghosts': sized by the halo at a build
   fit_hash(int64_t(np), n, exact);
 }
 
 void SelfContact::fit_hash(int64_t hashed, int64_t n, bool exact) {
   int64_t buckets = 1;
-  while (buckets < 2 * hashed) buckets *= 2;  // a power of two: the hash masks
+  while (buckets < hashed) buckets *= 2;  // a power of two (the hash masks), about one a particle
   fit(bucket_start_, size_t(buckets + 1), size_t(4 * n + 1), exact, int32_t(0));
   fit(bucket_items_, size_t(hashed), size_t(n), exact, int32_t(0));
 }
@@ -39,9 +38,9 @@ void SelfContact::memory(MemoryTable& t) const {
   const char* o = "SelfContact";
   t.add(o, "build positions", xb_);
   t.add(o, "contact ghosts' build positions", gx_);
-  t.add(o, "partner offsets and counts", first_.capacity() * sizeof(int64_t) + count_.capacity() * sizeof(int32_t));
-  t.add(o, "partners", ids_);
-  t.add(o, "partners' own-numbering indices", lo_);
+  t.add(o, "partner offsets", first_);
+  t.add(o, "partners (hashed indices)", partners_);
+  t.add(o, "contact ghosts' own-numbering indices", ghost_lo_);
   t.add(o, "spatial hash", (bucket_start_.capacity() + bucket_items_.capacity()) * sizeof(int32_t));
   t.add(o, "contact ghosts", ghosts_);
 }
@@ -103,10 +102,11 @@ int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
 // the thread count (and the partners are sorted after anyway).
 void SelfContact::hash_particles() {
   // Buckets for these particles (a coarse stage has far fewer than the
-  // grid the arrays were sized for): a power of two, at least twice them.
+  // grid the arrays were sized for): a power of two, at least as many
+  // (the partners are sorted after: the same lists whatever the buckets).
   const int64_t hashed = own_ + int64_t(ghosts_.size());
   buckets_ = 1;
-  while (buckets_ < 2 * hashed) buckets_ *= 2;
+  while (buckets_ < hashed) buckets_ *= 2;
   int32_t* start = bucket_start_.data();
   std::fill(start, start + buckets_ + 1, 0);
   int64_t cell[3];
@@ -147,7 +147,7 @@ void SelfContact::candidates(const Cloth& c, const ActiveList& particles, int64_
           if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
           double d2 = 0;
           for (int i = 0; i < 3; ++i) d2 += (xq[i] - xp[i]) * (xq[i] - xp[i]);
-          if (d2 < reach_ * reach_) f(q);
+          if (d2 < reach_ * reach_) f(int32_t(h));
         }
       }
 }
@@ -156,6 +156,7 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
   const int64_t n = particles.size();
   const int64_t* items = particles.items.data();
   own_ = n;
+  particles_ = &particles;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k)
     for (int i = 0; i < 3; ++i) xb_[3 * k + i] = x[3 * items[k] + i];
@@ -163,28 +164,29 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
   halo.plan_contact(particles.items, xb_.data(), reach_, ghosts_, gx_);
   fit_hash(n + int64_t(ghosts_.size()), c.grid.n(), false);
   hash_particles();
+  // Each particle's count at first_[k + 1], then their running sums.
+  first_[0] = 0;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
     int32_t m = 0;
-    candidates(c, particles, k, [&](int64_t) { ++m; });
-    count_[k] = m;
+    candidates(c, particles, k, [&](int32_t) { ++m; });
+    first_[k + 1] = m;
   }
   int64_t total = 0;
   for (int64_t k = 0; k < n; ++k) {
-    first_[k] = total;
-    total += count_[k];
+    total += first_[k + 1];
+    if (total > INT32_MAX) throw std::length_error("SelfContact: more pairs than 32-bit offsets reach");
+    first_[k + 1] = int32_t(total);
   }
-  if (total > int64_t(ids_.size())) {
-    ids_.resize(size_t(total + total / 2));
-    lo_.resize(ids_.size(), -1);
-  }
+  if (total > int64_t(partners_.size())) partners_.resize(size_t(total + total / 2));
   listed_ = total;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
-    int32_t* out = ids_.data() + first_[k];
+    int32_t* out = partners_.data() + first_[k];
     int32_t m = 0;
-    candidates(c, particles, k, [&](int64_t q) { out[m++] = int32_t(q); });
-    std::sort(out, out + m);  // the gather's fixed order: ascending global id
+    candidates(c, particles, k, [&](int32_t h) { out[m++] = h; });
+    // The gather's fixed order: ascending global id.
+    std::sort(out, out + m, [this](int32_t a, int32_t b) { return id_of_hashed(a) < id_of_hashed(b); });
   }
   keep_partners(halo);
 }
@@ -194,10 +196,8 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
 void SelfContact::keep_partners(const Halo& halo) {
   partner_.assign(ghosts_.size(), 0);
   if (!ghosts_.empty())
-    for (int64_t k = 0; k < listed_; ++k) {
-      const auto at = std::lower_bound(ghosts_.begin(), ghosts_.end(), int64_t(ids_[k]));
-      if (at != ghosts_.end() && *at == ids_[k]) partner_[size_t(at - ghosts_.begin())] = 1;
-    }
+    for (int64_t k = 0; k < listed_; ++k)
+      if (partners_[k] >= own_) partner_[size_t(partners_[k] - own_)] = 1;
   kept_.clear();
   for (size_t k = 0; k < ghosts_.size(); ++k)
     if (partner_[k]) kept_.push_back(ghosts_[k]);

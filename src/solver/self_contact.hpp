@@ -60,8 +60,7 @@ class SelfContact {
   template <class F>
   void for_partners(int64_t pos, F&& f) const {
     if (listed_ == 0 || pos < 0) return;  // no pairs at all (no cache line of the per-particle arrays read)
-    const int32_t* q = ids_.data() + first_[pos];
-    for (int k = 0; k < count_[pos]; ++k) f(int64_t(q[k]));
+    for (int32_t k = first_[pos]; k < first_[pos + 1]; ++k) f(id_of_hashed(partners_[k]));
   }
   // The term of pair (p, q) at positions x; false (t untouched) when apart.
   bool term(const double* x, int64_t p, int64_t q, PairTerm& t) const;
@@ -80,23 +79,25 @@ class SelfContact {
   void add_product_local(int64_t pos, int64_t p, const double* x, const double* vp, const double* v,
                          double* out) const {
     if (listed_ == 0) return;
-    const int64_t at = first_[pos];
-    for (int k = 0; k < count_[pos]; ++k) {
+    for (int32_t k = first_[pos]; k < first_[pos + 1]; ++k) {
+      const int32_t h = partners_[k];
       PairTerm t;
-      if (term(x, p, ids_[at + k], t)) normal_product(t, vp, v + 3 * int64_t(lo_[at + k]), out);
+      if (term(x, p, id_of_hashed(h), t)) normal_product(t, vp, v + 3 * int64_t(local_of_hashed(h)), out);
     }
   }
-  // Keeps each listed partner's index in a rank's own numbering,
-  // index_of(q), beside its id: done when the list or the numbering
-  // changes, so that a product never searches. Returns how many partners
-  // have none (index_of gave -1): 0 unless the numbering lacks a partner.
+  // Keeps each contact ghost partner's index in a rank's own numbering,
+  // index_of(q): done when the list or the numbering changes, so that a
+  // product never searches. A partner on this rank needs none: the own
+  // numbering starts with the particle list, so its index is its list
+  // position, the hashed index kept. Returns how many ghost partners have
+  // none (index_of gave -1): 0 unless the numbering lacks a partner.
   template <class IndexOf>
   int64_t number_partners(IndexOf&& index_of) {
+    if (ghost_lo_.size() < ghosts_.size()) ghost_lo_.resize(ghosts_.capacity());  // grows with ghosts_ only
     int64_t missing = 0;
-#pragma omp parallel for schedule(static) reduction(+ : missing)
-    for (int64_t k = 0; k < listed_; ++k) {
-      lo_[k] = int32_t(index_of(int64_t(ids_[k])));
-      missing += lo_[k] < 0;
+    for (size_t g = 0; g < ghosts_.size(); ++g) {
+      ghost_lo_[g] = partner_[g] ? int32_t(index_of(ghosts_[g])) : -1;
+      missing += partner_[g] && ghost_lo_[g] < 0;
     }
     return missing;
   }
@@ -168,10 +169,16 @@ class SelfContact {
   int64_t own_ = 0;                 // the list's particles at the last build
   std::vector<double> xb_;          // positions of the last build, 3 per list position
   std::vector<double> gx_;          // the contact ghosts' positions then (the build's scratch)
-  std::vector<int64_t> first_;      // per list position: its partners' offset in ids_
-  std::vector<int32_t> count_;      // per list position: its partners
-  std::vector<int32_t> ids_;        // partners, each particle's ascending
-  std::vector<int32_t> lo_;         // beside ids_: their indices in a rank's own numbering (number_partners)
+  // Per list position k: its partners are partners_[first_[k] .. first_[k+1]),
+  // each a hashed index (built_at's: a list position, or own_ plus a contact
+  // ghost's place), ascending by global id. One 32-bit number a pair stands
+  // for both the partner's id and its index in the own numbering.
+  std::vector<int32_t> first_;
+  std::vector<int32_t> partners_;
+  std::vector<int32_t> ghost_lo_;   // per contact ghost: its own-numbering index (partners only; number_partners)
+  const ActiveList* particles_ = nullptr;  // the list the last build hashed
+  int64_t id_of_hashed(int32_t h) const { return h < own_ ? particles_->items[size_t(h)] : ghosts_[size_t(h - own_)]; }
+  int64_t local_of_hashed(int32_t h) const { return h < own_ ? h : ghost_lo_[size_t(h - own_)]; }
   std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: hashed particles (built_at) by bucket
   std::vector<int64_t> ghosts_;     // the last build's contact ghosts, ascending
   std::vector<int64_t> kept_;       // those some listed particle has as a partner

@@ -39,7 +39,7 @@ inline double shear_strain(const double* x, const int64_t ids[4]) {
 
 double Evaluator::edge_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot) const {
   V g[2];
-  return edge_length(at(x, slot_in(slot, s >> 1)), at(x, slot_in(slot, nb_e_[pos])), g) / rest_e_[pos] - 1;
+  return edge_length(at(x, slot_in(slot, s >> 1)), at(x, slot_in(slot, edge_far(pos))), g) / rest_e_[pos] - 1;
 }
 double Evaluator::triple_curvature_at(const double* x, int64_t s, int64_t pos, const int32_t* slot) const {
   int64_t ids[3];
@@ -250,7 +250,7 @@ void Evaluator::edge_products(const ItemRun& run, const double* z, const double*
         for (int l = 0; l < 4; ++l) {
           const EdgeStiffness ks = edge_frozen(pos + l);
           a[l] = at(z, run.items[k + l] >> 1);
-          b[l] = at(z, nb_e_[pos + l]);
+          b[l] = at(z, edge_far(pos + l));
           ed[l] = ends_moves(pos + l);
           tension[l] = ks.tension;
           slope[l] = ks.slope_per_rest;
@@ -273,7 +273,7 @@ void Evaluator::edge_products(const ItemRun& run, const double* z, const double*
 }
 
 void Evaluator::edge_numbers(int64_t s, int64_t pos, const double* z) {
-  const int64_t p = s >> 1, q = nb_e_[pos];
+  const int64_t p = s >> 1, q = edge_far(pos);
   V g[2];
   const double len = edge_length(at(z, p), at(z, q), g);
   const double L0 = rest_e_[pos];
