@@ -124,8 +124,9 @@ void rebuild_geometry(Cloth& c, double density) {
   const int64_t n = c.grid.n();
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < n; ++p) {
+    if (!c.holds(p)) continue;
     const double ext[2] = {c.active(p) ? extent(c, p, 0) : 0, c.active(p) ? extent(c, p, 1) : 0};
-    c.mass[p] = c.active(p) && near_removed(c, p) ? density * cell_quarters(c, p) : density * ext[0] * ext[1];
+    c.mass_at(p) = c.active(p) && near_removed(c, p) ? density * cell_quarters(c, p) : density * ext[0] * ext[1];
   }
 }
 

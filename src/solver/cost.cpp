@@ -785,7 +785,7 @@ double Evaluator::particle_residual(int64_t p, int64_t pos, const GatherRow& row
   const double* x = z + 3 * p;
   const double* x1 = c_.x1_at(p);
   const double* x2 = c_.x2_at(p);
-  const double ca = it.accel, ratio = it.ratio, mass = c_.mass[p];
+  const double ca = it.accel, ratio = it.ratio, mass = c_.mass_at(p);
   const double cd = it.drag;
   double fc[3];
   contact_force(m_.contact, x, fc);
@@ -969,7 +969,7 @@ void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, 
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, c_.x1_at(p), fc, rho, jtr);
     if (m_.self_contact) self_.add_jtr(pos, p, z, rho_grid_.data(), jtr);
-    const double mca = c_.mass[p] * it.inertia;
+    const double mca = c_.mass_at(p) * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
   gather_vector(row, g);
@@ -1362,7 +1362,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     slope += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) slope += self_.slope_sum(pos, p, z) / 3;
-    const double inertia = c_.mass[p] * ca + slope;
+    const double inertia = c_.mass_at(p) * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather_diagonal(rows_[pos], dsum);
     const int64_t o = particle_entry(p, pos);
