@@ -29,10 +29,11 @@ std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, con
   }
   return z;
 }
-// The cells' corner tables for the slots `slot`, carried from c's.
+// The cells' corner tables and the neighbour tables for the slots `slot`,
+// carried from c's.
 void hold_cells(Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
-  for (std::vector<int32_t>* t : {c.cell, c.corner_of})
-    for (int k = 0; k < 3; ++k) {
+  for (std::vector<int32_t>* t : {c.cell, c.corner_of, c.next, c.prev})
+    for (int k = 0; k < (t == c.next || t == c.prev ? 2 : 3); ++k) {
       std::vector<int32_t> out(held.size(), -1);
       for (int64_t p : held)
         if (c.holds(p)) out[size_t(slot[size_t(p)])] = t[k][size_t(c.slot(p))];

@@ -314,10 +314,10 @@ void Evaluator::build_rows() {
     for (int64_t k = 0; k < ring.size(); ++k) ends(ring.items[k], own.size() + k);
   };
   place(lists_.edges, lists_.ring_edges,
-        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
+        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next_at(s & 1, s >> 1)); });
   place(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
-    nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
-    nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
+    nb_t_[2 * pos] = int32_t(c_.prev_at(s & 1, s >> 1));
+    nb_t_[2 * pos + 1] = int32_t(c_.next_at(s & 1, s >> 1));
   });
   place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell_at(k, s));
@@ -503,8 +503,8 @@ void Evaluator::freeze_bend_axes(const double* x1, const int32_t* slot) {
   list_rows(false);
   axes_stale_ = false;
   auto tangent = [&](int64_t p, int d) {
-    const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
-    const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
+    const int64_t a = c_.prev_at(d, p) >= 0 ? c_.prev_at(d, p) : p;
+    const int64_t b = c_.next_at(d, p) >= 0 ? c_.next_at(d, p) : p;
     V t = at(x1, slot_in(slot, b)) - at(x1, slot_in(slot, a));
     const double len = std::sqrt(dot(t, t));
     return len > 0 ? (1.0 / len) * t : V{0, 0, 0};
