@@ -24,7 +24,7 @@ constexpr double kHi = 0.01, kHj = 0.012, kDensity = 0.43;
 
 double total_mass(const Quadtree& t) {
   std::vector<double> m;
-  t.masses(kDensity, kHi, kHj, m);
+  t.masses(kDensity, kHi, kHj, nullptr, m);
   double s = 0;
   for (double v : m) s += v;
   return s;
@@ -74,7 +74,7 @@ TEST(Quadtree, RandomSequencesKeepBalanceMassAndHangingParticles) {
       std::vector<uint8_t> flags, level;
       t.mark(flags, level);
       std::vector<double> mass;
-      t.masses(kDensity, kHi, kHj, mass);
+      t.masses(kDensity, kHi, kHj, nullptr, mass);
       for (int64_t p = 0; p < int64_t(flags.size()); ++p) {
         int64_t a = -1, b = -1;
         const bool hangs = t.hanging_parents(p, a, b);
@@ -135,7 +135,7 @@ TEST(Quadtree, RefineThenCoarsenIsTheIdentity) {
     std::vector<uint8_t> f0, l0, f1, l1;
     std::vector<double> m0, m1;
     before.mark(f0, l0);
-    before.masses(kDensity, kHi, kHj, m0);
+    before.masses(kDensity, kHi, kHj, nullptr, m0);
     t.refine(c);
     t.coarsen(c);
     // A refinement that had to refine neighbours first is undone by
@@ -146,7 +146,7 @@ TEST(Quadtree, RefineThenCoarsenIsTheIdentity) {
       for (const Cell& o : now) t.coarsen(o);
     }
     t.mark(f1, l1);
-    t.masses(kDensity, kHi, kHj, m1);
+    t.masses(kDensity, kHi, kHj, nullptr, m1);
     ASSERT_EQ(f0, f1) << "leaf " << c.i << "," << c.j << " level " << c.level;
     ASSERT_EQ(l0, l1);
     ASSERT_EQ(m0, m1);
@@ -321,7 +321,7 @@ TEST(AmrcMesh, InternalForcesCancelWithHangingParticles) {
     for (int k = 0; k < 3; ++k) {
       sum[k] += rho[3 * p + k] * w.model.force_scale;
       const double a = w.model.accel_coeff() * (c.z[3 * p + k] - c.x1[3 * p + k] - (c.x1[3 * p + k] - c.x2[3 * p + k]));
-      inertia[k] += c.mass[p] * (a - w.model.gravity[k]);
+      inertia[k] += c.mass_at(p) * (a - w.model.gravity[k]);
       scale = std::max(scale, std::fabs(rho[3 * p + k] * w.model.force_scale));
     }
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(sum[k], inertia[k], 1e-9 * scale) << "component " << k;

@@ -134,11 +134,11 @@ TEST(DiscCloth, NoElementTouchesARemovedParticle) {
     removed += (c.flags[p] & kRemoved) != 0;
     if (c.flags[p] & kRemoved) {
       EXPECT_FALSE(c.active(p));
-      EXPECT_EQ(c.mass[p], 0.0);
+      EXPECT_EQ(c.mass_at(p), 0.0);
     }
     for (int d = 0; d < 2; ++d) {
-      EXPECT_TRUE(!c.edge_on[2 * p + d] || (ok(p) && ok(c.next[d][p]))) << p;
-      EXPECT_TRUE(!c.triple_on[2 * p + d] || (ok(p) && ok(c.next[d][p]) && ok(c.prev[d][p]))) << p;
+      EXPECT_TRUE(!c.edge_on[2 * p + d] || (ok(p) && ok(c.next_at(d, p)))) << p;
+      EXPECT_TRUE(!c.triple_on[2 * p + d] || (ok(p) && ok(c.next_at(d, p)) && ok(c.prev_at(d, p)))) << p;
     }
     if (c.shear_on[p]) {
       ++cells;

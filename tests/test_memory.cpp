@@ -394,7 +394,7 @@ TEST(Evaluator, ListWalkFindsWhatASearchFinds) {
       missing += want < 0;
     };
     for (int d = 0; d < 2; ++d) {
-      const int64_t pv = c.prev[d][p], nx = c.next[d][p];
+      const int64_t pv = c.prev_at(d, p), nx = c.next_at(d, p);
       ask(5 * d, 0, 2 * p + d);
       if (pv >= 0) ask(5 * d + 1, 0, 2 * pv + d);
       if (nx >= 0) ask(5 * d + 2, 1, 2 * nx + d);

@@ -82,11 +82,12 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
 }
 
 // The step history (x1, x2, 48 bytes a grid particle on one rank), z's
-// forces (40) and the cells' corners (24) hold this rank's tiles and its
-// ghosts: well under two thirds of the grid's on one of two ranks. Only
-// their slot map (4 bytes a particle) and z's positions (24) are the
-// grid's. After a few steps each own particle's history, forces and
-// cells are one rank's, bit for bit.
+// forces (40), the masses (8), the neighbour tables (16) and the cells'
+// corners (24) hold this rank's tiles and its ghosts: well under two thirds
+// of the grid's on one of two ranks. Their slot map (4 bytes a particle)
+// and z's positions (24) are the grid's. After a few steps each own
+// particle's history, forces, mass, neighbours and cells are one rank's,
+// bit for bit.
 TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
   Scene s;
   s.cloth.particles = {65, 65};
@@ -101,20 +102,25 @@ TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
   const double history = double(row_bytes(t, "Cloth: x1, x2 (earlier positions)"));
   const double forces = double(row_bytes(t, "Cloth: z's forces"));
   const double cells = double(row_bytes(t, "Cloth: cell, corner_of (shear cells' corners)"));
-  std::printf("x1, x2: %.1f, z's forces: %.1f, cells: %.1f bytes a grid particle on this rank of two\n", history / n,
-              forces / n, cells / n);
+  const double mass = double(row_bytes(t, "Cloth: mass"));
+  const double neighbours = double(row_bytes(t, "Cloth: next, prev (neighbour tables)"));
+  std::printf("x1, x2: %.1f, z's forces: %.1f, cells: %.1f, mass: %.1f, neighbours: %.1f bytes a grid particle on "
+              "this rank of two\n",
+              history / n, forces / n, cells / n, mass / n, neighbours / n);
   EXPECT_LT(history, 0.65 * 48 * n) << "x1, x2 sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_LT(forces, 0.65 * 40 * n) << "z's forces sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_LT(cells, 0.65 * 24 * n) << "cells' corners sized by the grid, not this rank's tiles and ghosts?";
+  EXPECT_LT(mass, 0.65 * 8 * n) << "masses sized by the grid, not this rank's tiles and ghosts?";
+  EXPECT_LT(neighbours, 0.65 * 16 * n) << "neighbour tables sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_EQ(row_bytes(t, "Cloth: z's positions"), size_t(24 * n));
-  EXPECT_EQ(row_bytes(t, "Cloth: slots of x1, x2, the forces and cells (several ranks)"), size_t(4 * n));
+  EXPECT_EQ(row_bytes(t, "Cloth: slots of x1, x2, the forces, masses, neighbours and cells (several ranks)"), size_t(4 * n));
   Timers tm;
   for (int k = 0; k < 3; ++k) {
     one.step();
     run.loop->step(tm);
   }
   const Cloth& whole = one.cloth;
-  int64_t own = 0, differ = 0, forces_differ = 0, cells_differ = 0;
+  int64_t own = 0, differ = 0, forces_differ = 0, cells_differ = 0, mass_differ = 0, neighbours_differ = 0;
   for (int tile : run.dec.owned) {
     const TileRange r = run.tiling.range(tile);
     for (int i = r.i0; i < r.i1; ++i)
@@ -127,12 +133,17 @@ TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
             forces_differ += c.force(b, e) != whole.force(b, e);
         for (int k = 0; k < 3; ++k)
           cells_differ += c.cell_at(k, p) != whole.cell_at(k, p) || c.corner_at(k, p) != whole.corner_at(k, p);
+        mass_differ += c.mass_at(p) != whole.mass_at(p);
+        for (int d = 0; d < 2; ++d)
+          neighbours_differ += c.next_at(d, p) != whole.next_at(d, p) || c.prev_at(d, p) != whole.prev_at(d, p);
       }
   }
   EXPECT_GT(own, 0);
   EXPECT_EQ(differ, 0) << "own particles' history differs from one rank's";
   EXPECT_EQ(forces_differ, 0) << "own particles' element forces differ from one rank's";
   EXPECT_EQ(cells_differ, 0) << "own particles' cells differ from one rank's";
+  EXPECT_EQ(mass_differ, 0) << "own particles' masses differ from one rank's";
+  EXPECT_EQ(neighbours_differ, 0) << "own particles' neighbours differ from one rank's";
 }
 
 // The multigrid on two ranks, its finest level divided: no rank receives

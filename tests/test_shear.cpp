@@ -99,10 +99,10 @@ TEST_P(ShearCells, RestGeometryFromTheNeighboursAlone) {
     ++triples;
     const int d = int(s & 1);
     const int64_t p = s >> 1;
-    const double rest = triple_rest_length(g, d, c.prev[d][p], p, c.next[d][p]);
+    const double rest = triple_rest_length(g, d, c.prev_at(d, p), p, c.next_at(d, p));
     EXPECT_EQ(rest, triple_rest_geometry(c, s).rest) << "triple slot " << s;
     // Half the gaps to both neighbours: the spacing on the finest mesh.
-    EXPECT_NEAR(rest, 0.5 * double(c.next[d][p] - c.prev[d][p]) / g.stride(d) * g.h(d), 1e-15) << s;
+    EXPECT_NEAR(rest, 0.5 * double(c.next_at(d, p) - c.prev_at(d, p)) / g.stride(d) * g.h(d), 1e-15) << s;
   }
   EXPECT_GT(triples, 0);
   for (int64_t s = 0; s < g.n(); ++s) {

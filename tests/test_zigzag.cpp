@@ -38,7 +38,7 @@ TEST(Zigzag, ALineThatTurnsBackAndForthAtEveryParticleIsCounted) {
   // lines along j stay straight.
   int along_i = 0;
   for (int64_t p : w.lists.particles.items) {
-    const int64_t q = w.cloth.next[0][p];
+    const int64_t q = w.cloth.next_at(0, p);
     along_i += (w.cloth.triple_on[2 * p] && q >= 0 && w.cloth.triple_on[2 * q]) ? 1 : 0;
   }
   EXPECT_GT(along_i, 0);

@@ -94,7 +94,7 @@ void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double
     double m = 0;
     for (int d = 0; d < 2; ++d)
       if (c.triple_on[2 * p + d])
-        m = std::max(m, turning_angle(x + 3 * c.prev[d][p], x + 3 * p, x + 3 * c.next[d][p]));
+        m = std::max(m, turning_angle(x + 3 * c.prev_at(d, p), x + 3 * p, x + 3 * c.next_at(d, p)));
     return m;
   });
 }

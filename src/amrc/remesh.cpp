@@ -7,7 +7,7 @@ void apply_tree(const Quadtree& tree, Cloth& c, double density, bool shear_enabl
   tree.mark(c.flags, c.level);
   rebuild_topology(c, shear_enabled, &tree);
   rebuild_geometry(c, density);
-  tree.masses(density, c.grid.hi, c.grid.hj, c.mass);
+  tree.masses(density, c.grid.hi, c.grid.hj, c.slots(), c.mass);
 }
 
 void hanging_links(const Quadtree& tree, std::vector<HangingLink>& out) {

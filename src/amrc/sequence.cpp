@@ -39,7 +39,7 @@ double material_rest(const Cloth& c, int64_t s) { return edge_rest_geometry(c, s
 
 double length(const Cloth& c, int64_t s) {
   const double* x = c.x();
-  const int64_t a = s >> 1, b = c.next[s & 1][a];
+  const int64_t a = s >> 1, b = c.next_at(s & 1, a);
   double d2 = 0;
   for (int k = 0; k < 3; ++k) d2 += (x[3 * b + k] - x[3 * a + k]) * (x[3 * b + k] - x[3 * a + k]);
   return std::sqrt(d2);

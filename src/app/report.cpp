@@ -224,7 +224,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
     j.value("drape_nodes", t.nodes);
     j.begin_object("drape_areas").value("shadow", t.shadow).value("specimen", t.specimen).value("disc", t.disc).end_object();
   }
-  j.value("total_mass", cloth.total_mass());
+  j.value("total_mass", s.total_mass);
   j.value("wall_seconds", wall);
   j.value("cpu_seconds", cpu);
   j.value("peak_rss_bytes", (long long)s.peak_rss);

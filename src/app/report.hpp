@@ -43,6 +43,7 @@ struct Summary {
   StepStats last;
   DecompStats decomp;
   int64_t active_min = 0, active_max = 0, active_final = 0;  // active particles
+  double total_mass = 0;  // kg, by tile over the ranks (total_mass in solver/model.hpp)
   int64_t refined = 0, coarsened = 0;                         // AMRC operations
   int64_t refined_inside = 0;  // of `refined`, leaves split for cutting into the obstacle
   int64_t refined_near = 0;    // of `refined`, leaves split for another part of the cloth nearby (self-contact)

@@ -111,8 +111,9 @@ void Simulation::rebalance() {
   Rebalance rb;
   rb.step = cloth.step;
   if (!drape::rebalance(dec_, cloth, tiling, scene.parallel.imbalance, comm_, rb)) return;
-  // The cells' corners of the particles newly held (Cloth::cell) from the tree.
-  rebuild_topology(cloth, scene.cloth.shear, &amrc->tree());
+  // The cells' corners and the masses of the particles newly held
+  // (Cloth::cell, Cloth::mass) from the tree.
+  amrc->apply(cloth, fabric.density, scene.cloth.shear);
   own_blocks();
   sum_.rebalances.push_back(rb);
   if (talk_)

@@ -163,6 +163,7 @@ void Simulation::finish() {
 void Simulation::summarise() {
   sum_.signal = stop_code_ / 2;
   sum_.final_level = sequence_level_;
+  sum_.total_mass = total_mass(cloth, tiling, dec_.owned, red());  // collective
   sum_.sequencing = sequencing_;
   sum_.drag = model.drag;
   sum_.pair_builds = loop->evaluator().self_contact().builds();

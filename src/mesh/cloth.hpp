@@ -86,11 +86,14 @@ struct Cloth {
   // with it.
   std::vector<int32_t> slot_of;
   uint64_t held_version = 0;
-  std::vector<double> mass;      // kg per particle: density * area it represents
+  // kg per particle (density * area it represents), held in slots like x1:
+  // read through mass_at.
+  std::vector<double> mass;
   std::vector<uint8_t> flags;    // ParticleFlag per particle
   std::vector<uint8_t> level;    // AMRC level of the particle's finest leaf (0: finest)
   // Neighbour tables over the active mesh: next/prev active particle along d, -1 at a border.
   // 32-bit like GatherRow's offsets (kMaxParticles is far below INT32_MAX).
+  // Held in slots like x1: read through next_at, prev_at.
   std::vector<int32_t> next[2], prev[2];
   // Element slot switches (1 = active element).
   std::vector<uint8_t> edge_on, triple_on, shear_on;
@@ -122,6 +125,10 @@ struct Cloth {
   const double* x1_at(int64_t p) const { return &x1[size_t(3 * slot(p))]; }
   double* x2_at(int64_t p) { return &x2[size_t(3 * slot(p))]; }
   const double* x2_at(int64_t p) const { return &x2[size_t(3 * slot(p))]; }
+  int64_t next_at(int d, int64_t p) const { return next[d][size_t(slot(p))]; }
+  int64_t prev_at(int d, int64_t p) const { return prev[d][size_t(slot(p))]; }
+  double& mass_at(int64_t p) { return mass[size_t(slot(p))]; }
+  double mass_at(int64_t p) const { return mass[size_t(slot(p))]; }
   // Corner k+1 of the cell at slot s (held); the cell p is corner k+1 of
   // (-1: none, or p not held here).
   int64_t cell_at(int k, int64_t s) const { return cell[k][size_t(slot(s))]; }
@@ -134,6 +141,8 @@ struct Cloth {
 
   bool active(int64_t p) const { return flags[p] & kActive; }
   bool free(int64_t p) const { return (flags[p] & (kActive | kFixed | kHanging)) == kActive; }
+  // The held particles' mass: the whole cloth's on one rank only (several
+  // ranks: total_mass in solver/model.hpp).
   double total_mass() const;
 };
 
@@ -146,7 +155,8 @@ inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
 // Particle p's index in an array held in slots (Cloth::slots; null: p).
 inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(slot[p]) : p; }
 
-// x1, x2, z's forces and the cells' corners for the particles `held`
+// x1, x2, z's forces, the masses, the neighbour tables and the cells' corners
+// for the particles `held`
 // (ascending grid ids) only, in that order: values of particles held before
 // carried over, the others 0 (-1 for the corners: rebuild_topology then).
 void hold_particles(Cloth& c, const std::vector<int64_t>& held);

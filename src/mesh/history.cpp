@@ -29,10 +29,11 @@ std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, con
   }
   return z;
 }
-// The cells' corner tables for the slots `slot`, carried from c's.
+// The cells' corner tables and the neighbour tables for the slots `slot`,
+// carried from c's.
 void hold_cells(Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
-  for (std::vector<int32_t>* t : {c.cell, c.corner_of})
-    for (int k = 0; k < 3; ++k) {
+  for (std::vector<int32_t>* t : {c.cell, c.corner_of, c.next, c.prev})
+    for (int k = 0; k < (t == c.next || t == c.prev ? 2 : 3); ++k) {
       std::vector<int32_t> out(held.size(), -1);
       for (int64_t p : held)
         if (c.holds(p)) out[size_t(slot[size_t(p)])] = t[k][size_t(c.slot(p))];
@@ -45,11 +46,12 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
   if (held.size() > size_t(std::numeric_limits<int32_t>::max() / 3))
     throw std::length_error("hold_particles: more particles than 32-bit slots reach");
   std::vector<int32_t> slot(size_t(c.grid.n()), -1);
-  std::vector<double> x1(3 * held.size(), 0.0), x2(3 * held.size(), 0.0);
+  std::vector<double> x1(3 * held.size(), 0.0), x2(3 * held.size(), 0.0), mass(held.size(), 0.0);
   for (size_t s = 0; s < held.size(); ++s) {
     const int64_t p = held[s];
     slot[size_t(p)] = int32_t(s);
     if (!c.holds(p)) continue;
+    mass[s] = c.mass_at(p);
     for (int k = 0; k < 3; ++k) {
       x1[3 * s + k] = c.x1_at(p)[k];
       x2[3 * s + k] = c.x2_at(p)[k];
@@ -60,6 +62,7 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
   c.slot_of.swap(slot);
   c.x1.swap(x1);
   c.x2.swap(x2);
+  c.mass.swap(mass);
   c.z.swap(z);
   c.layout.m = int64_t(held.size());
   ++c.held_version;

@@ -116,20 +116,26 @@ void Quadtree::mark(std::vector<uint8_t>& flags, std::vector<uint8_t>& level) co
     if ((flags[p] & kActive) && hanging_parents(p, a, b)) flags[p] |= kHanging;
 }
 
-void Quadtree::masses(double density, double hi, double hj, std::vector<double>& mass) const {
-  const int64_t n = int64_t(ni_) * nj_;
-  mass.assign(n, 0.0);
+void Quadtree::masses(double density, double hi, double hj, const int32_t* slot, std::vector<double>& mass) const {
+  if (slot)
+    std::fill(mass.begin(), mass.end(), 0.0);  // sized by hold_particles: no allocation while stepping
+  else
+    mass.assign(size_t(ni_) * nj_, 0.0);
+  auto at = [&](int64_t p) -> double* { return slot ? (slot[p] >= 0 ? &mass[size_t(slot[p])] : nullptr) : &mass[p]; };
   for_each_leaf([&](const Cell& c) {
     const int ie = i_end(c), je = j_end(c);
     const double quarter = 0.25 * density * (ie - c.i) * hi * (je - c.j) * hj;
-    for (int64_t q : {id(c.i, c.j), id(ie, c.j), id(c.i, je), id(ie, je)}) mass[q] += quarter;
+    for (int64_t q : {id(c.i, c.j), id(ie, c.j), id(c.i, je), id(ie, je)})
+      if (double* m = at(q)) *m += quarter;
   });
   // Hanging particles pass their mass to their side's ends, finest sides
   // first, so that mass reaching a hanging end moves on up.
   for (const Hanging& g : hanging()) {
-    mass[g.a] += (1 - g.t) * mass[g.h];
-    mass[g.b] += g.t * mass[g.h];
-    mass[g.h] = 0;
+    double* h = at(g.h);
+    if (!h) continue;
+    if (double* a = at(g.a)) *a += (1 - g.t) * *h;
+    if (double* b = at(g.b)) *b += g.t * *h;
+    *h = 0;
   }
 }
 

@@ -88,8 +88,12 @@ class Quadtree {
   // Mass per active particle: each leaf's area (clipped) times `density`,
   // a quarter to each corner; a hanging particle's share goes to the ends
   // of its coarse side by the interpolation weights (it is not solved for).
-  // Inactive particles: 0.
-  void masses(double density, double hi, double hj, std::vector<double>& mass) const;
+  // Inactive particles: 0. Held in slots (slot: the grid's slot map, -1
+  // where not held, mass sized to the held particles; null: every particle
+  // at its grid id): a held particle's share from one not held is left out,
+  // which only ghosts beyond the ring can miss (a side's chain of hanging
+  // particles spans under 2^(max level + 1) particles).
+  void masses(double density, double hi, double hj, const int32_t* slot, std::vector<double>& mass) const;
 
   // Whether the grid-line segment between particles a < b lies on leaf
   // sides all along (an edge of the mesh may join them).

@@ -33,52 +33,45 @@ void rebuild_cells(Cloth& c, bool shear_enabled, const Quadtree* tree) {
     });
     return;
   }
-  for (int64_t s = 0; s < g.n(); ++s) {
-    const int64_t a = c.next[0][s], b = c.next[1][s];
-    if (!c.active(s) || a != s + g.nj || b != s + 1) continue;
-    if (c.next[1][a] == a + 1 && c.next[0][b] == b + g.nj) put(s, a, b, a + 1);
-  }
+  // Without a tree an edge joins neighbouring active particles: the cell
+  // is there where its four corners are active.
+  for (int i = 0; i + 1 < g.ni; ++i)
+    for (int j = 0; j + 1 < g.nj; ++j) {
+      const int64_t s = g.id(i, j);
+      if (c.active(s) && c.active(s + g.nj) && c.active(s + 1) && c.active(s + g.nj + 1)) put(s, s + g.nj, s + 1, s + g.nj + 1);
+    }
 }
 }  // namespace
 
 void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
   const Grid& g = c.grid;
-  for (int d = 0; d < 2; ++d) {
-    c.next[d].assign(g.n(), -1);
-    c.prev[d].assign(g.n(), -1);
+  for (int d = 0; d < 2; ++d) {  // the held particles' (same sizes between holds: no allocation)
+    c.next[d].assign(size_t(c.layout.m), -1);
+    c.prev[d].assign(size_t(c.layout.m), -1);
   }
-  // Walk each grid line linking consecutive active particles.
-  for (int i = 0; i < g.ni; ++i) {
+  c.edge_on.assign(size_t(2 * g.n()), 0);
+  c.triple_on.assign(size_t(2 * g.n()), 0);
+  // Walk each grid line linking consecutive active particles: an edge from
+  // each linked particle, a triple at each linked both ways.
+  auto walk = [&](int d, int64_t first, int count) {
     int64_t last = -1;
-    for (int j = 0; j < g.nj; ++j) {
-      const int64_t p = g.id(i, j);
+    bool last_in = false;  // whether `last` has a link in
+    for (int k = 0; k < count; ++k) {
+      const int64_t p = first + k * g.stride(d);
       if (!c.active(p)) continue;
-      if (last >= 0 && (!tree || tree->on_side(last, p))) {
-        c.next[1][last] = p;
-        c.prev[1][p] = last;
+      const bool in = last >= 0 && (!tree || tree->on_side(last, p));
+      if (in) {
+        if (c.holds(last)) c.next[d][size_t(c.slot(last))] = int32_t(p);
+        if (c.holds(p)) c.prev[d][size_t(c.slot(p))] = int32_t(last);
+        c.edge_on[2 * last + d] = 1;
+        if (last_in) c.triple_on[2 * last + d] = 1;
       }
       last = p;
+      last_in = in;
     }
-  }
-  for (int j = 0; j < g.nj; ++j) {
-    int64_t last = -1;
-    for (int i = 0; i < g.ni; ++i) {
-      const int64_t p = g.id(i, j);
-      if (!c.active(p)) continue;
-      if (last >= 0 && (!tree || tree->on_side(last, p))) {
-        c.next[0][last] = p;
-        c.prev[0][p] = last;
-      }
-      last = p;
-    }
-  }
-  for (int64_t p = 0; p < g.n(); ++p) {
-    const bool on = c.active(p);
-    for (int d = 0; d < 2; ++d) {
-      c.edge_on[2 * p + d] = on && c.next[d][p] >= 0;
-      c.triple_on[2 * p + d] = on && c.next[d][p] >= 0 && c.prev[d][p] >= 0;
-    }
-  }
+  };
+  for (int i = 0; i < g.ni; ++i) walk(1, g.id(i, 0), g.nj);
+  for (int j = 0; j < g.nj; ++j) walk(0, g.id(0, j), g.ni);
   rebuild_cells(c, shear_enabled, tree);
 }
 
@@ -87,8 +80,9 @@ namespace {
 // Half the rest distance to each active neighbour along d: the extent of cloth a particle stands for.
 double extent(const Cloth& c, int64_t p, int d) {
   double e = 0;
-  if (c.next[d][p] >= 0) e += half_gap(c.grid, d, p, c.next[d][p]);
-  if (c.prev[d][p] >= 0) e += half_gap(c.grid, d, c.prev[d][p], p);
+  const int64_t nx = c.next_at(d, p), pv = c.prev_at(d, p);
+  if (nx >= 0) e += half_gap(c.grid, d, p, nx);
+  if (pv >= 0) e += half_gap(c.grid, d, pv, p);
   return e * c.grid.h(d);
 }
 
@@ -124,13 +118,14 @@ void rebuild_geometry(Cloth& c, double density) {
   const int64_t n = c.grid.n();
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < n; ++p) {
+    if (!c.holds(p)) continue;
     const double ext[2] = {c.active(p) ? extent(c, p, 0) : 0, c.active(p) ? extent(c, p, 1) : 0};
-    c.mass[p] = c.active(p) && near_removed(c, p) ? density * cell_quarters(c, p) : density * ext[0] * ext[1];
+    c.mass_at(p) = c.active(p) && near_removed(c, p) ? density * cell_quarters(c, p) : density * ext[0] * ext[1];
   }
 }
 
 RestGeometry edge_rest_geometry(const Cloth& c, int64_t s) {
-  const int64_t p = s >> 1, q = c.next[s & 1][p];
+  const int64_t p = s >> 1, q = c.next_at(s & 1, p);
   const int d = int(s & 1);
   const double len = double(q - p) / c.grid.stride(d) * c.grid.h(d);
   return {len, 0.5 * (extent(c, p, 1 - d) + extent(c, q, 1 - d))};

@@ -158,7 +158,7 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       }
   };
   const int64_t p = lists_.particles.items[r];
-  one(p, r, rows_[r], c_.mass[p] * m_.inertia_coeff(), 1.0);
+  one(p, r, rows_[r], c_.mass_at(p) * m_.inertia_coeff(), 1.0);
   for (int64_t e = ht_start_[r]; e < ht_start_[r + 1]; ++e) {
     const size_t k = size_t(ht_[e].row);
     one(lists_.hanging[k].h, -1, hanging_row(k), 0.0, ht_[e].w);  // no mass at h

@@ -333,11 +333,11 @@ void Evaluator::place_neighbours() {
     for (int64_t k = 0; k < ring.size(); ++k) ends(ring.items[k], own.size() + k);
   };
   place(lists_.edges, lists_.ring_edges,
-        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next[s & 1][s >> 1]); });
+        [&](int64_t s, int64_t pos) { nb_e_[pos] = int32_t(c_.next_at(s & 1, s >> 1)); });
   if (local_on_) return;  // build_local, next in list_rows, numbers the triples' and cells'
   place(lists_.triples, lists_.ring_triples, [&](int64_t s, int64_t pos) {
-    nb_t_[2 * pos] = int32_t(c_.prev[s & 1][s >> 1]);
-    nb_t_[2 * pos + 1] = int32_t(c_.next[s & 1][s >> 1]);
+    nb_t_[2 * pos] = int32_t(c_.prev_at(s & 1, s >> 1));
+    nb_t_[2 * pos + 1] = int32_t(c_.next_at(s & 1, s >> 1));
   });
   place(lists_.shears, lists_.ring_shears, [&](int64_t s, int64_t pos) {
     for (int k = 0; k < 3; ++k) nb_s_[3 * pos + k] = int32_t(c_.cell_at(k, s));
@@ -512,8 +512,8 @@ void Evaluator::freeze_bend_axes(const double* x1, const int32_t* slot) {
   list_rows(false);
   axes_stale_ = false;
   auto tangent = [&](int64_t p, int d) {
-    const int64_t a = c_.prev[d][p] >= 0 ? c_.prev[d][p] : p;
-    const int64_t b = c_.next[d][p] >= 0 ? c_.next[d][p] : p;
+    const int64_t a = c_.prev_at(d, p) >= 0 ? c_.prev_at(d, p) : p;
+    const int64_t b = c_.next_at(d, p) >= 0 ? c_.next_at(d, p) : p;
     V t = at(x1, slot_in(slot, b)) - at(x1, slot_in(slot, a));
     const double len = std::sqrt(dot(t, t));
     return len > 0 ? (1.0 / len) * t : V{0, 0, 0};
@@ -794,7 +794,7 @@ double Evaluator::particle_residual(int64_t p, int64_t pos, const GatherRow& row
   const double* x = z + 3 * p;
   const double* x1 = c_.x1_at(p);
   const double* x2 = c_.x2_at(p);
-  const double ca = it.accel, ratio = it.ratio, mass = c_.mass[p];
+  const double ca = it.accel, ratio = it.ratio, mass = c_.mass_at(p);
   const double cd = it.drag;
   double fc[3];
   contact_force(m_.contact, x, fc);
@@ -978,7 +978,7 @@ void Evaluator::particle_gradient(int64_t p, int64_t pos, const GatherRow& row, 
     contact_force(m_.contact, z + 3 * p, fc, rho, jtr);
     friction_force(m_.contact, z + 3 * p, c_.x1_at(p), fc, rho, jtr);
     if (m_.self_contact) self_.add_jtr(pos, p, z, rho_grid_.data(), jtr);
-    const double mca = c_.mass[p] * it.inertia;
+    const double mca = c_.mass_at(p) * it.inertia;
     for (int k = 0; k < 3; ++k) g[k] = (mca * rho[k] + jtr[k]) / m_.force_scale;
   }
   gather_vector(row, g);
@@ -1371,7 +1371,7 @@ void Evaluator::diagonal_as(double* z, double* diag, bool compact) {
     contact_force(m_.contact, z + 3 * p, fc, nullptr, nullptr, &slope);
     slope += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) slope += self_.slope_sum(pos, p, z) / 3;
-    const double inertia = c_.mass[p] * ca + slope;
+    const double inertia = c_.mass_at(p) * ca + slope;
     double dsum = inertia * inertia * inv2;
     gather_diagonal(rows_[pos], dsum);
     const int64_t o = particle_entry(p, pos);

@@ -522,13 +522,13 @@ class Evaluator {
   template <class F>
   void edge_particles(int64_t s, F&& f) const {
     f(0, s >> 1);
-    f(1, c_.next[s & 1][s >> 1]);
+    f(1, c_.next_at(s & 1, s >> 1));
   }
   template <class F>
   void triple_particles(int64_t s, F&& f) const {
-    f(0, c_.prev[s & 1][s >> 1]);
+    f(0, c_.prev_at(s & 1, s >> 1));
     f(1, s >> 1);
-    f(2, c_.next[s & 1][s >> 1]);
+    f(2, c_.next_at(s & 1, s >> 1));
   }
   template <class F>
   void cell_particles(int64_t s, F&& f) const {
@@ -773,7 +773,7 @@ class Evaluator {
 template <class Visit>
 void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
   for (int d = 0; d < 2; ++d) {
-    const int64_t pv = c_.prev[d][p], nx = c_.next[d][p];
+    const int64_t pv = c_.prev_at(d, p), nx = c_.next_at(d, p);
     const int at = GatherRow::kPerDirection * d;
     if (c_.edge_on[2 * p + d]) visit(at, 0, 2 * p + d, 0);
     if (pv >= 0 && c_.edge_on[2 * pv + d]) visit(at + 1, 0, 2 * pv + d, 1);

@@ -48,10 +48,10 @@ void fill_triangle(Raster& r, const double* a, const double* b, const double* c)
 // and d, next to both.
 bool cell_of(const Cloth& c, int64_t p, int64_t& a, int64_t& b, int64_t& d) {
   if (!c.active(p)) return false;
-  a = c.next[0][p], b = c.next[1][p];
+  a = c.next_at(0, p), b = c.next_at(1, p);
   if (a < 0 || b < 0) return false;
-  d = c.next[1][a];
-  return d >= 0 && d == c.next[0][b];
+  d = c.next_at(1, a);
+  return d >= 0 && d == c.next_at(0, b);
 }
 
 // The specimen flat, where make_cloth laid it out.

@@ -27,8 +27,9 @@ void add_memory(MemoryTable& t, const Cloth& c) {
   t.add(o, "z's positions", cap(c.z) - forces);
   t.add(o, "z's forces", forces);
   t.add(o, "x1, x2 (earlier positions)", cap(c.x1) + cap(c.x2));
-  t.add(o, "slots of x1, x2, the forces and cells (several ranks)", c.slot_of);
-  t.add(o, "mass, flags, level", cap(c.mass) + cap(c.flags) + cap(c.level));
+  t.add(o, "slots of x1, x2, the forces, masses, neighbours and cells (several ranks)", c.slot_of);
+  t.add(o, "mass", cap(c.mass));
+  t.add(o, "flags, level", cap(c.flags) + cap(c.level));
   t.add(o, "next, prev (neighbour tables)", cap(c.next[0]) + cap(c.next[1]) + cap(c.prev[0]) + cap(c.prev[1]));
   t.add(o, "element switches", cap(c.edge_on) + cap(c.triple_on) + cap(c.shear_on));
   size_t cells = 0;

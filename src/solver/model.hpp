@@ -3,6 +3,7 @@
 // direction, gravity, contact, the time step, and the scales that make the
 // cost terms comparable (docs/design.md §1, §6).
 #include "solver/band.hpp"
+#include "solver/reducer.hpp"
 #include "mesh/cloth.hpp"
 #include "solver/contact.hpp"
 #include "solver/fabric.hpp"
@@ -44,5 +45,8 @@ void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, dou
 // A flat cloth at rest at the scene's height, on the finest mesh, every
 // particle active, nothing clamped. Allocates every array once.
 Cloth make_cloth(const Scene& scene, const Fabric& fabric);
+// The cloth's mass, summed by tile over the owned tiles' particles (a rank
+// holds only its tiles' and ghosts' masses): the same bits on any ranks.
+double total_mass(const Cloth& c, const Tiling& tl, const std::vector<int>& owned, const Reducer& red);
 
 }  // namespace drape

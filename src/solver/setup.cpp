@@ -16,6 +16,18 @@ double Cloth::total_mass() const {
   return m;
 }
 
+double total_mass(const Cloth& c, const Tiling& tl, const std::vector<int>& owned, const Reducer& red) {
+  std::vector<double> part(owned.size(), 0.0);
+  for (size_t k = 0; k < owned.size(); ++k) {
+    const TileRange r = tl.range(owned[k]);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) part[k] += c.mass_at(c.grid.id(i, j));
+  }
+  double m = 0;
+  red.sum_tiles(owned, part.data(), 1, &m);
+  return m;
+}
+
 // Contact acts within delta of a surface (half the mesh spacing, or half the
 // thickness if larger); a push of delta balances 10^4 weights of the mesh's
 // particles, so they settle well within delta and never reach the surface.
@@ -106,7 +118,7 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   c.z.assign(c.layout.size(), 0.0);
   c.x1.assign(3 * n, 0.0);
   c.x2.assign(3 * n, 0.0);
-  c.mass.assign(n, 0.0);
+  c.mass.assign(n, 0.0);  // held: every particle, at its grid id, until hold_particles
   c.flags.assign(n, kActive);
   c.level.assign(n, 0);
   c.edge_on.assign(2 * n, 0);

@@ -179,7 +179,7 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   auto particle = [&](int64_t p, int64_t pos) {
     double fc[kKc];
     contact_terms(p, z, fc);
-    const double fn = fc[3], slope = fc[4], mass = c_.mass[p] * inertia;
+    const double fn = fc[3], slope = fc[4], mass = c_.mass_at(p) * inertia;
     const double* vp = v + 3 * pos;  // the free particles come first, in list order
     double out[3];
     for (int k = 0; k < 3; ++k) out[k] = mass * vp[k];
@@ -354,7 +354,7 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   auto particle = [&](int64_t p, int64_t pos) {
     double kc[kKc];
     contact_terms(p, z, kc);
-    double dsum = c_.mass[p] * inertia + kc[4] / 3;
+    double dsum = c_.mass_at(p) * inertia + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
     gather_diagonal(rows_[pos], dsum);

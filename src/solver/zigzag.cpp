@@ -10,7 +10,7 @@ namespace {
 // tangent, whose length is about the turning angle.
 void line_turn(const Cloth& c, int64_t p, int d, double* out) {
   const double* x = c.x();
-  const double *a = x + 3 * c.prev[d][p], *b = x + 3 * p, *n = x + 3 * c.next[d][p];
+  const double *a = x + 3 * c.prev_at(d, p), *b = x + 3 * p, *n = x + 3 * c.next_at(d, p);
   double u[3], v[3], lu = 0, lv = 0;
   for (int k = 0; k < 3; ++k) {
     u[k] = b[k] - a[k];
@@ -31,7 +31,7 @@ Zigzag count_zigzags(const Cloth& c, const std::vector<int64_t>& particles, cons
   const double floor2 = min_turn * min_turn;
   for (int64_t p : particles)
     for (int d = 0; d < 2; ++d) {
-      const int64_t q = c.next[d][p];
+      const int64_t q = c.next_at(d, p);
       if (!c.triple_on[2 * p + d] || q < 0 || !c.triple_on[2 * q + d]) continue;
       double s[3], t[3];
       line_turn(c, p, d, s);
