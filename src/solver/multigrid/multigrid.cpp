@@ -109,7 +109,8 @@ void Multigrid::build_from(int first, bool fresh) {
 void Multigrid::galerkin_below(int l, bool fresh) {
   Level& F = levels_[l - 1];
   F.AP.val.swap(ap_values_);
-  if (!fresh) resize_keeping(F.AP.val, 9 * size_t(F.AP.blocks()));
+  // Never shrunk between builds: regrowing would zero what the product sets.
+  if (!fresh && F.AP.val.size() < 9 * size_t(F.AP.blocks())) resize_keeping(F.AP.val, 9 * size_t(F.AP.blocks()));
   galerkin(matrix(l - 1), F.transfer(), F.AP, levels_[l].A, fresh);
   F.AP.val.swap(ap_values_);
 }
