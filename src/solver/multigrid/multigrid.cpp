@@ -86,7 +86,7 @@ void Multigrid::build_from(int first, bool fresh) {
   const int last = levels() - 1;
   for (int l = first; l <= last; ++l) {
     const double t0 = omp_get_wtime();
-    if (l > first) galerkin(matrix(l - 1), levels_[l - 1].transfer(), levels_[l - 1].AP, levels_[l].A, fresh);
+    if (l > first) galerkin_below(l, fresh);
     Level& L = levels_[l];
     if (l < last) {
       if (L.lines) L.line.setup(matrix(l), L.ids, ni_, nj_, L.stride, fresh);
@@ -100,6 +100,19 @@ void Multigrid::build_from(int first, bool fresh) {
     stats_[l].blocks = matrix(l).blocks();
     stats_[l].setup_seconds += omp_get_wtime() - t0;
   }
+}
+
+// Level l's operator, P^T (A P) from the level above. A P's values are dead
+// once the level below is built, so every level's A P keeps its pattern
+// alone and writes its values into one workspace (the largest level's size,
+// reused by each build: no allocation once sized).
+void Multigrid::galerkin_below(int l, bool fresh) {
+  Level& F = levels_[l - 1];
+  F.AP.val.swap(ap_values_);
+  // Never shrunk between builds: regrowing would zero what the product sets.
+  if (!fresh && F.AP.val.size() < 9 * size_t(F.AP.blocks())) resize_keeping(F.AP.val, 9 * size_t(F.AP.blocks()));
+  galerkin(matrix(l - 1), F.transfer(), F.AP, levels_[l].A, fresh);
+  F.AP.val.swap(ap_values_);
 }
 
 // Level l's test vectors (pseudo-random on the finest fitted level, else

@@ -136,7 +136,7 @@ class Multigrid {
     BlockMatrix A;             // P^T A P of the level above (level 0: a0_)
     Prolongation P0;           // bilinear, from the next level down to this one
     Prolongation P;            // P0 smoothed (where `smoothed`) or fitted (where `fitted`)
-    BlockMatrix AP0, AP;       // A P0 and A P: the products' workspaces
+    BlockMatrix AP0, AP;       // A P0 and A P: the products' workspaces (AP: its pattern; values in ap_values_)
     bool smoothed = false, fitted = false;
     const Prolongation& transfer() const { return smoothed || fitted ? P : P0; }
     bool lines = false;  // smoothed by lines (else the point Chebyshev)
@@ -153,12 +153,14 @@ class Multigrid {
   void fit(int l);
   void cycle_vectors(const BlockMatrix& A);
   void build_from(int first, bool fresh);
+  void galerkin_below(int l, bool fresh);
 
   MultigridSettings s_;
   std::vector<Level> levels_;
   std::vector<MultigridLevelStats> stats_;
   const BlockMatrix* a0_ = nullptr;
   CoarseSolve coarse_;
+  std::vector<double> ap_values_;     // every level's A P values in turn (galerkin_below)
   std::unique_ptr<Multigrid> probe_;  // fit_cycles: the bilinear cycle that relaxes the test vectors
   uint64_t stamp_ = 0;
   uint64_t levels_built_ = 0;
