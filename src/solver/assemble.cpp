@@ -87,7 +87,6 @@ void Evaluator::assembly_maps() {
 // hanging particle that leans on it.
 template <class Add>
 void Evaluator::row_terms(int64_t r, Add&& add) const {
-  const size_t np = size_t(lists_.particles.size());
   // With global columns (several ranks): any rank's free particle has one.
   const int32_t* global = asm_columns_;
   auto column = [&](int32_t row) { return global ? global[lists_.particles.items[row]] : row; };

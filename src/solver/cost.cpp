@@ -568,9 +568,7 @@ void Evaluator::edge_forces(const ItemRun& run, const double* z, double* settle)
 }
 
 void Evaluator::edge_band(int64_t s, int64_t pos, double L, const V g[2], const double* z, double* settle) {
-  const int64_t p = s >> 1;
   const int d = int(s & 1);
-  const int64_t q = edge_far(pos);
   const double L0 = rest_e_[pos], w = width_e_[pos];
   const BandValue bv = m_.stretch[d].at(L / L0 - 1.0);  // once: the power law is costly
   const Band::Stop st = m_.stretch[d].stop(anc_e_[pos], bv);
