@@ -24,26 +24,26 @@ OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --set amrc.last_level=2 --set solver.st
   --output "$work/probe"
 [[ $(field "$work/probe" at_rest) == true ]] || fail "level 2 did not come to rest"
 split=$(field "$work/probe" steps)
-before=$((split - 2)) stop=$((split + 3)) end=$((split + 12))
+before=$((split - 2)) cut=$((split + 3)) end=$((split + 12))
 
 # The reference: uninterrupted to `end`, 1 rank x 1 thread.
 OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --set amrc.last_level=1 --set solver.steps=$end --quiet --output "$work/ref"
 [[ $(report "$work/ref" 'r["stages"][1]["from_step"]') == "$split" ]] || fail "the reference split elsewhere"
-# 1 rank stops 2 steps before the split; 2 ranks go on from there (only
-# the last steps, to keep the test short), split, stop 3 steps
+# 1 rank ends 2 steps before the split; 2 ranks go on from there (only
+# the last steps, to keep the test short), split, end 3 steps
 # later inside the window and write the checkpoint together; 1 rank x 2
 # threads go on from it.
 OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --set amrc.last_level=1 --set solver.steps=$before \
   --set output.checkpoint_every=$before --quiet --output "$work/part"
-OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=$stop \
-  --set output.checkpoint_every=$stop > "$work/part.out" 2>&1 || { cat "$work/part.out"; fail "the 2-rank part"; }
+OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=$cut \
+  --set output.checkpoint_every=$cut > "$work/part.out" 2>&1 || { cat "$work/part.out"; fail "the 2-rank part"; }
 eased=$(sed -n 's/.*edges eased from up to \([0-9.]*\) % strain.*/\1/p' "$work/part.out")
 python3 -c "import sys; sys.exit(not float('${eased:-0}') > 1)" ||
   fail "the split eased no edge beyond 1 % (got '$eased' %): nothing to restart inside"
 h5ls "$work/part/checkpoint.h5/state" | grep -q '^eased_rest ' ||
-  fail "the checkpoint at step $stop (split at $split) holds no eased rest lengths"
+  fail "the checkpoint at step $cut (split at $split) holds no eased rest lengths"
 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=$end --threads 2 --quiet
 [[ $(field "$work/part" steps) == "$end" ]] || fail "the restarted run did not reach step $end"
 [[ $(sum "$work/part") == "$(sum "$work/ref")" ]] ||
-  fail "restarted at step $stop (split at $split, eased $eased %): $(sum "$work/part") vs $(sum "$work/ref")"
-echo "ok split at step $split easing up to $eased %, restarted at $stop on 1 rank of 2: $(sum "$work/ref")"
+  fail "restarted at step $cut (split at $split, eased $eased %): $(sum "$work/part") vs $(sum "$work/ref")"
+echo "ok split at step $split easing up to $eased %, restarted at $cut on 1 rank of 2: $(sum "$work/ref")"
