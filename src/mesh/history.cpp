@@ -31,14 +31,19 @@ std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, con
 }
 // The cells' corner tables and the neighbour tables for the slots `slot`,
 // carried from c's.
-void hold_cells(Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
-  for (std::vector<int32_t>* t : {c.cell, c.corner_of, c.next, c.prev})
-    for (int k = 0; k < (t == c.next || t == c.prev ? 2 : 3); ++k) {
+void hold_tables(Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
+  auto carry = [&](std::vector<int32_t>* tables, int count) {
+    for (int k = 0; k < count; ++k) {
       std::vector<int32_t> out(held.size(), -1);
       for (int64_t p : held)
-        if (c.holds(p)) out[size_t(slot[size_t(p)])] = t[k][size_t(c.slot(p))];
-      t[k].swap(out);
+        if (c.holds(p)) out[size_t(slot[size_t(p)])] = tables[k][size_t(c.slot(p))];
+      tables[k].swap(out);
     }
+  };
+  carry(c.cell, 3);
+  carry(c.corner_of, 3);
+  carry(c.next, 2);
+  carry(c.prev, 2);
 }
 }  // namespace
 
@@ -58,7 +63,7 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
     }
   }
   std::vector<double> z = held_z(c, slot, held);
-  hold_cells(c, slot, held);
+  hold_tables(c, slot, held);
   c.slot_of.swap(slot);
   c.x1.swap(x1);
   c.x2.swap(x2);
