@@ -138,9 +138,9 @@ void SelfContact::candidates(const Cloth& c, const ActiveList& particles, int64_
         const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
         const int64_t k = bucket_of(cx, cy, cz);
         // The cheapest test first: most of a bucket lies beyond the reach
-        // (its cell's far side, or another cell hashed here); the cell's
-        // divisions and the grid id's only for the few within it. The
-        // same tests, so the same partners in the same order.
+        // (its cell's far side, or another cell hashed here); most within
+        // it are mesh neighbours, so the cell's three divisions come last.
+        // The same tests, so the same partners in the same order.
         for (int32_t s = bucket_start_[k]; s < bucket_start_[k + 1]; ++s) {
           const int64_t h = bucket_items_[s];
           if (h == pos) continue;
@@ -148,11 +148,11 @@ void SelfContact::candidates(const Cloth& c, const ActiveList& particles, int64_
           double d2 = 0;
           for (int i = 0; i < 3; ++i) d2 += (xq[i] - xp[i]) * (xq[i] - xp[i]);
           if (!(d2 < reach2)) continue;
-          cell_of(xq, at);
-          if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
           const int64_t q = h < own_ ? particles.items[size_t(h)] : ghosts_[size_t(h - own_)];
           const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
           if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
+          cell_of(xq, at);
+          if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
           f(int32_t(h));
         }
       }
