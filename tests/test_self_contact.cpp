@@ -135,6 +135,65 @@ int pairs_in_contact(const Simulation& w) {
   return n;
 }
 
+// The positions turned by `angle` about an oblique axis and shifted off
+// the hash's cell planes: the sheet then crosses cells along every axis
+// (flat, it would lie in one layer of cells and never need the others).
+void turn_and_shift(Simulation& w, double angle) {
+  const double a[3] = {1 / std::sqrt(14.0), 2 / std::sqrt(14.0), 3 / std::sqrt(14.0)};
+  const double c = std::cos(angle), s = std::sin(angle), shift[3] = {0.0137, -0.0071, 0.0093};
+  for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
+    double* x = &w.cloth.z[3 * p];
+    const double ax = a[0] * x[0] + a[1] * x[1] + a[2] * x[2];
+    const double cr[3] = {a[1] * x[2] - a[2] * x[1], a[2] * x[0] - a[0] * x[2], a[0] * x[1] - a[1] * x[0]};
+    double r[3];
+    for (int i = 0; i < 3; ++i) r[i] = x[i] * c + cr[i] * s + a[i] * ax * (1 - c);  // Rodrigues
+    for (int i = 0; i < 3; ++i) x[i] = r[i] + shift[i];
+  }
+}
+
+// The pair list is exactly the pairs a search of every two listed particles
+// finds at the build's positions: within the search reach (2D) and not mesh
+// neighbours, each particle's ascending by id. The pressed strip's pairs lie
+// at all distances and directions up to and past the reach, and turned it
+// crosses the hash's cells along every axis, so a spatial hash that skips a
+// cell it must search, or lists a pair twice, is seen.
+TEST(SelfContact, ListIsEveryPairWithinReach) {
+  for (unsigned seed : {3u, 4u}) {
+    const auto world = pressed_world(seed);
+    Simulation& w = *world;
+    turn_and_shift(w, 0.3 * seed);
+    Evaluator& ev = w.loop->evaluator();
+    ev.evaluate(w.cloth.z.data(), nullptr);  // the first build: at these positions
+    const SelfContact& sc = ev.self_contact();
+    ASSERT_EQ(sc.builds(), 1u);
+    const Grid& g = w.cloth.grid;
+    const double reach = 2 * sc.distance(), exclude2 = reach * reach * (1 + 1e-9);
+    const double* x = w.cloth.z.data();
+    const std::vector<int64_t>& items = w.lists.particles.items;
+    int64_t listed = 0, near_reach = 0;
+    for (size_t k = 0; k < items.size(); ++k) {
+      const int64_t p = items[k];
+      std::vector<int64_t> want, got;
+      for (int64_t q : items) {
+        if (q == p) continue;
+        const double di = (g.i_of(q) - g.i_of(p)) * g.hi, dj = (g.j_of(q) - g.j_of(p)) * g.hj;
+        if (di * di + dj * dj <= exclude2) continue;
+        double d2 = 0;
+        for (int i = 0; i < 3; ++i) d2 += (x[3 * q + i] - x[3 * p + i]) * (x[3 * q + i] - x[3 * p + i]);
+        if (d2 < reach * reach) want.push_back(q);
+        near_reach += d2 > 0.8 * reach * reach && d2 < 1.2 * reach * reach;
+      }
+      std::sort(want.begin(), want.end());  // the list's order: ascending id
+      sc.for_partners(int64_t(k), [&](int64_t q) { got.push_back(q); });
+      ASSERT_EQ(got, want) << "particle " << p;
+      listed += int64_t(got.size());
+    }
+    EXPECT_EQ(listed, sc.listed());
+    ASSERT_GT(listed, 200) << "too few pairs to tell a search from another";
+    ASSERT_GT(near_reach, 100) << "too few pairs about the reach to see a cell skipped";
+  }
+}
+
 // The Newton term's gradient (self-contact's -J^T r included, J with the
 // normal's curvature) against central differences of the cost, position by
 // position, relative to the largest entry.

@@ -131,23 +131,29 @@ void SelfContact::candidates(const Cloth& c, const ActiveList& particles, int64_
   int64_t home[3], at[3];
   cell_of(xp, home);
   const int ip = g.i_of(p), jp = g.j_of(p);
+  const double reach2 = reach_ * reach_;
   for (int64_t a = -1; a <= 1; ++a)
     for (int64_t b = -1; b <= 1; ++b)
       for (int64_t e = -1; e <= 1; ++e) {
         const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
         const int64_t k = bucket_of(cx, cy, cz);
+        // The cheapest test first: most of a bucket lies beyond the reach
+        // (its cell's far side, or another cell hashed here); most within
+        // it are mesh neighbours, so the cell's three divisions come last.
+        // The same tests, so the same partners in the same order.
         for (int32_t s = bucket_start_[k]; s < bucket_start_[k + 1]; ++s) {
           const int64_t h = bucket_items_[s];
           if (h == pos) continue;
-          const int64_t q = h < own_ ? particles.items[size_t(h)] : ghosts_[size_t(h - own_)];
           const double* xq = built_at(h);
-          cell_of(xq, at);
-          if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
-          const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
-          if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
           double d2 = 0;
           for (int i = 0; i < 3; ++i) d2 += (xq[i] - xp[i]) * (xq[i] - xp[i]);
-          if (d2 < reach_ * reach_) f(int32_t(h));
+          if (!(d2 < reach2)) continue;
+          const int64_t q = h < own_ ? particles.items[size_t(h)] : ghosts_[size_t(h - own_)];
+          const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
+          if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
+          cell_of(xq, at);
+          if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
+          f(int32_t(h));
         }
       }
 }
