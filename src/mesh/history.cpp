@@ -15,6 +15,11 @@ std::vector<int64_t> held_particles(const Cloth& c) {
 }
 
 namespace {
+template <class... V>
+void release(V&... v) {
+  (std::vector<typename V::value_type>().swap(v), ...);
+}
+
 // z's force blocks for the slots `slot` (m of them), carried from c's.
 std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
   Layout L{c.layout.n, int64_t(held.size())};
@@ -62,13 +67,18 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
       x2[3 * s + k] = c.x2_at(p)[k];
     }
   }
-  std::vector<double> z = held_z(c, slot, held);
-  hold_tables(c, slot, held);
-  c.slot_of.swap(slot);
+  // Each old array goes as soon as its new one is full, before the next is
+  // made: at the first hold (the whole grid's arrays) the peak stays that
+  // of the grid's cloth. x1, x2 and the masses are not read below.
   c.x1.swap(x1);
   c.x2.swap(x2);
   c.mass.swap(mass);
+  release(x1, x2, mass);
+  hold_tables(c, slot, held);
+  std::vector<double> z = held_z(c, slot, held);
   c.z.swap(z);
+  release(z);
+  c.slot_of.swap(slot);
   c.layout.m = int64_t(held.size());
   ++c.held_version;
 }
