@@ -1,4 +1,5 @@
-// A rank's step history (x1, x2) and element forces for the particles it holds only.
+// A rank's step history (x1, x2), element forces and the tables beside them
+// for the particles it holds only.
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -50,6 +51,17 @@ void hold_tables(Cloth& c, const std::vector<int32_t>& slot, const std::vector<i
   carry(c.next, 2);
   carry(c.prev, 2);
 }
+
+// The element switches for the slots `slot`, carried from c's (`per` a
+// particle: 2 edges or triples, 1 cell).
+void hold_switches(const Cloth& c, std::vector<uint8_t>& on, int per, const std::vector<int32_t>& slot,
+                   const std::vector<int64_t>& held) {
+  std::vector<uint8_t> out(per * held.size(), 0);
+  for (int64_t p : held)
+    if (c.holds(p))
+      for (int k = 0; k < per; ++k) out[size_t(per * slot[size_t(p)] + k)] = on[size_t(per * c.slot(p) + k)];
+  on.swap(out);
+}
 }  // namespace
 
 void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
@@ -75,6 +87,9 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
   c.mass.swap(mass);
   release(x1, x2, mass);
   hold_tables(c, slot, held);
+  hold_switches(c, c.edge_on, 2, slot, held);
+  hold_switches(c, c.triple_on, 2, slot, held);
+  hold_switches(c, c.shear_on, 1, slot, held);
   std::vector<double> z = held_z(c, slot, held);
   c.z.swap(z);
   release(z);
