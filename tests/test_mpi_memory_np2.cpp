@@ -82,12 +82,12 @@ TEST(MemoryNp2, EvaluatorHoldsItsOwnTiles) {
 }
 
 // The step history (x1, x2, 48 bytes a grid particle on one rank), z's
-// forces (40), the masses (8), the neighbour tables (16) and the cells'
-// corners (24) hold this rank's tiles and its ghosts: well under two thirds
-// of the grid's on one of two ranks. Their slot map (4 bytes a particle)
-// and z's positions (24) are the grid's. After a few steps each own
-// particle's history, forces, mass, neighbours and cells are one rank's,
-// bit for bit.
+// forces (40), the masses (8), the neighbour tables (16), the cells'
+// corners (24) and the element switches (5) hold this rank's tiles and its
+// ghosts: well under two thirds of the grid's on one of two ranks. Their
+// slot map (4 bytes a particle) and z's positions (24) are the grid's.
+// After a few steps each own particle's history, forces, mass, neighbours,
+// cells and switches are one rank's, bit for bit.
 TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
   Scene s;
   s.cloth.particles = {65, 65};
@@ -104,14 +104,16 @@ TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
   const double cells = double(row_bytes(t, "Cloth: cell, corner_of (shear cells' corners)"));
   const double mass = double(row_bytes(t, "Cloth: mass"));
   const double neighbours = double(row_bytes(t, "Cloth: next, prev (neighbour tables)"));
-  std::printf("x1, x2: %.1f, z's forces: %.1f, cells: %.1f, mass: %.1f, neighbours: %.1f bytes a grid particle on "
-              "this rank of two\n",
-              history / n, forces / n, cells / n, mass / n, neighbours / n);
+  const double switches = double(row_bytes(t, "Cloth: element switches"));
+  std::printf("x1, x2: %.1f, z's forces: %.1f, cells: %.1f, mass: %.1f, neighbours: %.1f, switches: %.2f bytes a grid "
+              "particle on this rank of two\n",
+              history / n, forces / n, cells / n, mass / n, neighbours / n, switches / n);
   EXPECT_LT(history, 0.65 * 48 * n) << "x1, x2 sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_LT(forces, 0.65 * 40 * n) << "z's forces sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_LT(cells, 0.65 * 24 * n) << "cells' corners sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_LT(mass, 0.65 * 8 * n) << "masses sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_LT(neighbours, 0.65 * 16 * n) << "neighbour tables sized by the grid, not this rank's tiles and ghosts?";
+  EXPECT_LT(switches, 0.65 * 5 * n) << "element switches sized by the grid, not this rank's tiles and ghosts?";
   EXPECT_EQ(row_bytes(t, "Cloth: z's positions"), size_t(24 * n));
   EXPECT_EQ(row_bytes(t, "Cloth: slots of x1, x2, the forces, masses, neighbours and cells (several ranks)"), size_t(4 * n));
   Timers tm;
@@ -120,7 +122,8 @@ TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
     run.loop->step(tm);
   }
   const Cloth& whole = one.cloth;
-  int64_t own = 0, differ = 0, forces_differ = 0, cells_differ = 0, mass_differ = 0, neighbours_differ = 0;
+  int64_t own = 0, differ = 0, forces_differ = 0, cells_differ = 0, mass_differ = 0, neighbours_differ = 0,
+          switches_differ = 0;
   for (int tile : run.dec.owned) {
     const TileRange r = run.tiling.range(tile);
     for (int i = r.i0; i < r.i1; ++i)
@@ -136,6 +139,9 @@ TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
         mass_differ += c.mass_at(p) != whole.mass_at(p);
         for (int d = 0; d < 2; ++d)
           neighbours_differ += c.next_at(d, p) != whole.next_at(d, p) || c.prev_at(d, p) != whole.prev_at(d, p);
+        for (int64_t s : {2 * p, 2 * p + 1})
+          switches_differ += c.edge_on_at(s) != whole.edge_on_at(s) || c.triple_on_at(s) != whole.triple_on_at(s);
+        switches_differ += c.shear_on_at(p) != whole.shear_on_at(p);
       }
   }
   EXPECT_GT(own, 0);
@@ -144,6 +150,7 @@ TEST(MemoryNp2, HistoryForcesAndCellsHoldTheirOwnTilesAndGhosts) {
   EXPECT_EQ(cells_differ, 0) << "own particles' cells differ from one rank's";
   EXPECT_EQ(mass_differ, 0) << "own particles' masses differ from one rank's";
   EXPECT_EQ(neighbours_differ, 0) << "own particles' neighbours differ from one rank's";
+  EXPECT_EQ(switches_differ, 0) << "own particles' element switches differ from one rank's";
 }
 
 // The multigrid on two ranks, its finest level divided: no rank receives

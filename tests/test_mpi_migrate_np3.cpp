@@ -173,5 +173,19 @@ TEST(Rebalance, OnlyWhenImbalancedThenEvensTheLoad) {
     EXPECT_EQ(c.z[3 * p + 1], code(first[tl.tile_of(p)], p, 1)) << "ghost " << p << " on rank " << rank();
 }
 
+// The element switches are held in slots: a rank counts the work of the
+// tiles it owns and the ranks sum them into the whole cloth's work, which
+// its own held cloth alone no longer gives.
+TEST(Rebalance, TileWorkSummedOverOwnersIsTheWholeCloths) {
+  Scene scene = flat_scene(23, 19, 0.22, 0.18);
+  const Cloth whole = make_cloth(scene, test_fabric());
+  Cloth c = whole;
+  const Tiling tl(23, 19, 4);
+  Decomposition d = decompose(c, tl, MPI_COMM_WORLD);
+  hold_own_particles(c, tl, d);
+  EXPECT_EQ(tile_work(c, tl, d.owned, MPI_COMM_WORLD), tile_work(whole, tl));
+  EXPECT_NE(tile_work(c, tl), tile_work(whole, tl)) << "switches of tiles not held: still the grid's?";
+}
+
 }  // namespace
 }  // namespace drape::test

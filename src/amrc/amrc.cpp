@@ -93,7 +93,7 @@ void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double
   per_particle(c, share, out, [&](int64_t p) {
     double m = 0;
     for (int d = 0; d < 2; ++d)
-      if (c.triple_on[2 * p + d])
+      if (c.triple_on_at(2 * p + d))
         m = std::max(m, turning_angle(x + 3 * c.prev_at(d, p), x + 3 * p, x + 3 * c.next_at(d, p)));
     return m;
   });
@@ -207,7 +207,7 @@ void Amrc::carry_shear(Cloth& c) const {
       for (int cj = l.j; cj < je; ++cj) {
         const Cell o = old_.leaf_at(ci, cj);
         const int64_t s = c.grid.id(o.i, o.j);
-        if (!shear_on_[s] || !c.holds(s)) continue;
+        if (!c.holds(s) || !shear_on_[size_t(c.slot(s))]) continue;
         sum += c.force(2, s);
         ++count;
       }
@@ -262,7 +262,7 @@ void Amrc::carry_over(Cloth& c, double density, bool shear) {
       for (int d = 0; d < 2; ++d) {
         double s = 0, w = 0;
         for (int q = 0; q < 4; ++q)
-          if (on[2 * k.id[q] + d] && c.holds(k.id[q])) {
+          if (c.holds(k.id[q]) && on[size_t(c.pair_slot(2 * k.id[q] + d))]) {
             s += k.w[q] * c.force(b, 2 * k.id[q] + d);
             w += k.w[q];
           }

@@ -19,19 +19,30 @@ std::vector<int> Partition::tiles_of(int rank) const {
   return out;
 }
 
+namespace {
+int64_t work_of(const Cloth& c, const Tiling& tiling, int t) {
+  const TileRange r = tiling.range(t);
+  int64_t w = 0;
+  for (int i = r.i0; i < r.i1; ++i)
+    for (int j = r.j0; j < r.j1; ++j) {
+      const int64_t p = c.grid.id(i, j);
+      w += c.free(p) + c.edge_on_at(2 * p) + c.edge_on_at(2 * p + 1) + c.triple_on_at(2 * p) +
+           c.triple_on_at(2 * p + 1) + c.shear_on_at(p);
+    }
+  return std::max<int64_t>(1, w);  // METIS wants positive weights
+}
+}  // namespace
+
 std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling) {
   std::vector<int64_t> work(tiling.count(), 0);
-  for (int t = 0; t < tiling.count(); ++t) {
-    const TileRange r = tiling.range(t);
-    int64_t w = 0;
-    for (int i = r.i0; i < r.i1; ++i)
-      for (int j = r.j0; j < r.j1; ++j) {
-        const int64_t p = c.grid.id(i, j);
-        w += c.free(p) + c.edge_on[2 * p] + c.edge_on[2 * p + 1] + c.triple_on[2 * p] +
-             c.triple_on[2 * p + 1] + c.shear_on[p];
-      }
-    work[t] = std::max<int64_t>(1, w);  // METIS wants positive weights
-  }
+  for (int t = 0; t < tiling.count(); ++t) work[t] = work_of(c, tiling, t);
+  return work;
+}
+
+std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned, MPI_Comm comm) {
+  std::vector<int64_t> work(tiling.count(), 0);
+  for (int t : owned) work[t] = work_of(c, tiling, t);
+  MPI_Allreduce(MPI_IN_PLACE, work.data(), int(work.size()), MPI_INT64_T, MPI_SUM, comm);
   return work;
 }
 

@@ -23,7 +23,11 @@ struct Partition {
 };
 
 // Work per tile: free particles plus active edges, triples and shear corners.
+// Of every tile: c must hold every particle (one rank, or before decomposing).
 std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling);
+// Of every tile on several ranks, each counting the tiles `owned` it holds
+// (the element switches are held in slots); collective.
+std::vector<int64_t> tile_work(const Cloth& c, const Tiling& tiling, const std::vector<int>& owned, MPI_Comm comm);
 
 // The figures (work per rank, imbalance, edge cut) of a given owner map.
 Partition partition_with(const Tiling& tiling, const std::vector<int>& owner, const std::vector<int64_t>& work,

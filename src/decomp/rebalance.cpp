@@ -51,7 +51,7 @@ bool rebalance(Decomposition& d, Cloth& c, const Tiling& tl, double threshold, M
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &ranks);
-  const std::vector<int64_t> work = tile_work(c, tl);  // flags are the same on every rank
+  const std::vector<int64_t> work = tile_work(c, tl, d.owned, comm);
   const Partition now = partition_with(tl, d.partition.owner, work, ranks);
   out.imbalance_before = out.imbalance_after = now.imbalance;
   out.edge_cut = now.edge_cut;

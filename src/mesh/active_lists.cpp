@@ -56,14 +56,14 @@ void build_unknowns(const Cloth& c, const Tiling& tiling, const std::vector<int>
     });
     rows([&](int64_t p) {
       for (int d = 0; d < 2; ++d)
-        if (c.edge_on[2 * p + d]) add(c.force_index(0, 2 * p + d));
+        if (c.edge_on_at(2 * p + d)) add(c.force_index(0, 2 * p + d));
     });
     rows([&](int64_t p) {
       for (int d = 0; d < 2; ++d)
-        if (c.triple_on[2 * p + d]) add(c.force_index(1, 2 * p + d));
+        if (c.triple_on_at(2 * p + d)) add(c.force_index(1, 2 * p + d));
     });
     rows([&](int64_t p) {
-      if (c.shear_on[p]) add(c.force_index(2, p));
+      if (c.shear_on_at(p)) add(c.force_index(2, p));
     });
   }
   runs.tile_begin[owned.size()] = runs.count();
@@ -152,9 +152,9 @@ void build_active_lists(const Cloth& c, const Tiling& tiling, const std::vector<
   static std::atomic<uint64_t> builds{0};
   out.stamp = ++builds;
   out.tiles = owned;
-  auto edge = [&](int64_t s) { return c.edge_on[s] != 0; };
-  auto triple = [&](int64_t s) { return c.triple_on[s] != 0; };
-  auto shear = [&](int64_t s) { return c.shear_on[s] != 0; };
+  auto edge = [&](int64_t s) { return c.edge_on_at(s); };
+  auto triple = [&](int64_t s) { return c.triple_on_at(s); };
+  auto shear = [&](int64_t s) { return c.shear_on_at(s); };
   build_one(tiling, owned, 1, [&](int64_t p) { return c.free(p); }, out.particles);
   build_one(tiling, owned, 2, edge, out.edges);
   build_one(tiling, owned, 2, triple, out.triples);

@@ -95,7 +95,9 @@ struct Cloth {
   // 32-bit like GatherRow's offsets (kMaxParticles is far below INT32_MAX).
   // Held in slots like x1: read through next_at, prev_at.
   std::vector<int32_t> next[2], prev[2];
-  // Element slot switches (1 = active element).
+  // Element slot switches (1 = active element), held in slots like x1
+  // (an edge's and a triple's at 2 slot(p) + d, a cell's at slot(p)): read
+  // through edge_on_at, triple_on_at, shear_on_at.
   std::vector<uint8_t> edge_on, triple_on, shear_on;
   // Shear cells: cell[k] holds corner k+1 of slot s's cell (k = 0: along i
   // from s, 1: along j, 2: across), -1 where the slot is off; corner_of[k]
@@ -129,6 +131,13 @@ struct Cloth {
   int64_t prev_at(int d, int64_t p) const { return prev[d][size_t(slot(p))]; }
   double& mass_at(int64_t p) { return mass[size_t(slot(p))]; }
   double mass_at(int64_t p) const { return mass[size_t(slot(p))]; }
+  // Whether element s (edge, triple: 2p+d; cell: p) is on; false where p
+  // is not held here (its switches are its holders').
+  bool edge_on_at(int64_t s) const { return holds(s >> 1) && edge_on[size_t(pair_slot(s))]; }
+  bool triple_on_at(int64_t s) const { return holds(s >> 1) && triple_on[size_t(pair_slot(s))]; }
+  bool shear_on_at(int64_t s) const { return holds(s) && shear_on[size_t(slot(s))]; }
+  // Where element slot s = 2p+d of a held p lies in the arrays of two a particle.
+  int64_t pair_slot(int64_t s) const { return 2 * slot(s >> 1) + (s & 1); }
   // Corner k+1 of the cell at slot s (held); the cell p is corner k+1 of
   // (-1: none, or p not held here).
   int64_t cell_at(int k, int64_t s) const { return cell[k][size_t(slot(s))]; }
@@ -155,10 +164,10 @@ inline void shear_cell(const Cloth& c, int64_t s, int64_t ids[4]) {
 // Particle p's index in an array held in slots (Cloth::slots; null: p).
 inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(slot[p]) : p; }
 
-// x1, x2, z's forces, the masses, the neighbour tables and the cells' corners
-// for the particles `held`
+// x1, x2, z's forces, the masses, the neighbour tables, the cells' corners
+// and the element switches for the particles `held`
 // (ascending grid ids) only, in that order: values of particles held before
-// carried over, the others 0 (-1 for the corners: rebuild_topology then).
+// carried over, the others 0 (-1 for the corners, switches off: rebuild_topology then).
 void hold_particles(Cloth& c, const std::vector<int64_t>& held);
 // The particles c holds x1, x2 and forces for, ascending.
 std::vector<int64_t> held_particles(const Cloth& c);

@@ -1,4 +1,5 @@
-// A rank's step history (x1, x2) and element forces for the particles it holds only.
+// A rank's step history (x1, x2), element forces and the tables beside them
+// for the particles it holds only.
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -15,6 +16,11 @@ std::vector<int64_t> held_particles(const Cloth& c) {
 }
 
 namespace {
+template <class... V>
+void release(V&... v) {
+  (std::vector<typename V::value_type>().swap(v), ...);
+}
+
 // z's force blocks for the slots `slot` (m of them), carried from c's.
 std::vector<double> held_z(const Cloth& c, const std::vector<int32_t>& slot, const std::vector<int64_t>& held) {
   Layout L{c.layout.n, int64_t(held.size())};
@@ -45,6 +51,17 @@ void hold_tables(Cloth& c, const std::vector<int32_t>& slot, const std::vector<i
   carry(c.next, 2);
   carry(c.prev, 2);
 }
+
+// The element switches for the slots `slot`, carried from c's (`per` a
+// particle: 2 edges or triples, 1 cell).
+void hold_switches(const Cloth& c, std::vector<uint8_t>& on, int per, const std::vector<int32_t>& slot,
+                   const std::vector<int64_t>& held) {
+  std::vector<uint8_t> out(per * held.size(), 0);
+  for (int64_t p : held)
+    if (c.holds(p))
+      for (int k = 0; k < per; ++k) out[size_t(per * slot[size_t(p)] + k)] = on[size_t(per * c.slot(p) + k)];
+  on.swap(out);
+}
 }  // namespace
 
 void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
@@ -62,13 +79,21 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
       x2[3 * s + k] = c.x2_at(p)[k];
     }
   }
-  std::vector<double> z = held_z(c, slot, held);
-  hold_tables(c, slot, held);
-  c.slot_of.swap(slot);
+  // Each old array goes as soon as its new one is full, before the next is
+  // made: at the first hold (the whole grid's arrays) the peak stays that
+  // of the grid's cloth. x1, x2 and the masses are not read below.
   c.x1.swap(x1);
   c.x2.swap(x2);
   c.mass.swap(mass);
+  release(x1, x2, mass);
+  hold_tables(c, slot, held);
+  hold_switches(c, c.edge_on, 2, slot, held);
+  hold_switches(c, c.triple_on, 2, slot, held);
+  hold_switches(c, c.shear_on, 1, slot, held);
+  std::vector<double> z = held_z(c, slot, held);
   c.z.swap(z);
+  release(z);
+  c.slot_of.swap(slot);
   c.layout.m = int64_t(held.size());
   ++c.held_version;
 }

@@ -16,10 +16,10 @@ void rebuild_cells(Cloth& c, bool shear_enabled, const Quadtree* tree) {
     c.cell[k].assign(size_t(c.layout.m), -1);
     c.corner_of[k].assign(size_t(c.layout.m), -1);
   }
-  c.shear_on.assign(g.n(), 0);
+  c.shear_on.assign(size_t(c.layout.m), 0);
   if (!shear_enabled) return;
   auto put = [&](int64_t s, int64_t a, int64_t b, int64_t d) {
-    c.shear_on[s] = 1;
+    if (c.holds(s)) c.shear_on[size_t(c.slot(s))] = 1;
     const int64_t corner[3] = {a, b, d};
     for (int k = 0; k < 3; ++k) {
       if (c.holds(s)) c.cell[k][size_t(c.slot(s))] = int32_t(corner[k]);
@@ -49,8 +49,8 @@ void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
     c.next[d].assign(size_t(c.layout.m), -1);
     c.prev[d].assign(size_t(c.layout.m), -1);
   }
-  c.edge_on.assign(size_t(2 * g.n()), 0);
-  c.triple_on.assign(size_t(2 * g.n()), 0);
+  c.edge_on.assign(size_t(2 * c.layout.m), 0);
+  c.triple_on.assign(size_t(2 * c.layout.m), 0);
   // Walk each grid line linking consecutive active particles: an edge from
   // each linked particle, a triple at each linked both ways.
   auto walk = [&](int d, int64_t first, int count) {
@@ -61,10 +61,12 @@ void rebuild_topology(Cloth& c, bool shear_enabled, const Quadtree* tree) {
       if (!c.active(p)) continue;
       const bool in = last >= 0 && (!tree || tree->on_side(last, p));
       if (in) {
-        if (c.holds(last)) c.next[d][size_t(c.slot(last))] = int32_t(p);
+        if (c.holds(last)) {
+          c.next[d][size_t(c.slot(last))] = int32_t(p);
+          c.edge_on[size_t(c.pair_slot(2 * last + d))] = 1;
+          if (last_in) c.triple_on[size_t(c.pair_slot(2 * last + d))] = 1;
+        }
         if (c.holds(p)) c.prev[d][size_t(c.slot(p))] = int32_t(last);
-        c.edge_on[2 * last + d] = 1;
-        if (last_in) c.triple_on[2 * last + d] = 1;
       }
       last = p;
       last_in = in;

@@ -1399,10 +1399,10 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
     for (int j = std::max(0, jc - 3); j <= std::min(gr.nj - 1, jc + 3); ++j) {
       const int64_t p = gr.id(i, j);
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) edge_forces(2 * p + d, position_of(0, 2 * p + d), z);
-        if (c_.triple_on[2 * p + d]) triple_forces(2 * p + d, position_of(1, 2 * p + d), z);
+        if (c_.edge_on_at(2 * p + d)) edge_forces(2 * p + d, position_of(0, 2 * p + d), z);
+        if (c_.triple_on_at(2 * p + d)) triple_forces(2 * p + d, position_of(1, 2 * p + d), z);
       }
-      if (c_.shear_on[p]) shear_forces(p, position_of(2, p), z);
+      if (c_.shear_on_at(p)) shear_forces(p, position_of(2, p), z);
     }
   double sum = 0;
   for (int i = std::max(0, ic - 2); i <= std::min(gr.ni - 1, ic + 2); ++i)
@@ -1414,10 +1414,10 @@ double Evaluator::window_cost(const double* z, int ic, int jc) {
         sum += particle_residual(p, pos, row_of(p), z, rho, inertia_terms(), passed_force(pos));
       }
       for (int d = 0; d < 2; ++d) {
-        if (c_.edge_on[2 * p + d]) sum += cost_e_[position_of(0, 2 * p + d)];
-        if (c_.triple_on[2 * p + d]) sum += cost_t_[position_of(1, 2 * p + d)];
+        if (c_.edge_on_at(2 * p + d)) sum += cost_e_[position_of(0, 2 * p + d)];
+        if (c_.triple_on_at(2 * p + d)) sum += cost_t_[position_of(1, 2 * p + d)];
       }
-      if (c_.shear_on[p]) sum += cost_s_[position_of(2, p)];
+      if (c_.shear_on_at(p)) sum += cost_s_[position_of(2, p)];
     }
   return sum;
 }
@@ -1431,8 +1431,8 @@ CostTerms Evaluator::numeric_gradient(double* z, double* grad) {
   // window_cost reaches elements by slot: each active one needs a list
   // position, which holds where one rank owns every tile (this mode's case).
   for (int64_t s = 0; s < 2 * gr.n(); ++s)
-    if ((c_.edge_on[s] && position_of(0, s) < 0) || (c_.triple_on[s] && position_of(1, s) < 0) ||
-        (s < gr.n() && c_.shear_on[s] && position_of(2, s) < 0))
+    if ((c_.edge_on_at(s) && position_of(0, s) < 0) || (c_.triple_on_at(s) && position_of(1, s) < 0) ||
+        (s < gr.n() && c_.shear_on_at(s) && position_of(2, s) < 0))
       throw std::logic_error("numeric gradient: an active element in no list (it needs every tile on one rank)");
   const double hmin = std::min(gr.hi, gr.hj), F0 = m_.force_scale;
   auto diff = [&](int64_t u, int64_t p, double scale) {

@@ -775,13 +775,13 @@ void Evaluator::for_gathered(int64_t p, Visit&& visit) const {
   for (int d = 0; d < 2; ++d) {
     const int64_t pv = c_.prev_at(d, p), nx = c_.next_at(d, p);
     const int at = GatherRow::kPerDirection * d;
-    if (c_.edge_on[2 * p + d]) visit(at, 0, 2 * p + d, 0);
-    if (pv >= 0 && c_.edge_on[2 * pv + d]) visit(at + 1, 0, 2 * pv + d, 1);
-    if (nx >= 0 && c_.triple_on[2 * nx + d]) visit(at + 2, 1, 2 * nx + d, 0);
-    if (c_.triple_on[2 * p + d]) visit(at + 3, 1, 2 * p + d, 1);
-    if (pv >= 0 && c_.triple_on[2 * pv + d]) visit(at + 4, 1, 2 * pv + d, 2);
+    if (c_.edge_on_at(2 * p + d)) visit(at, 0, 2 * p + d, 0);
+    if (pv >= 0 && c_.edge_on_at(2 * pv + d)) visit(at + 1, 0, 2 * pv + d, 1);
+    if (nx >= 0 && c_.triple_on_at(2 * nx + d)) visit(at + 2, 1, 2 * nx + d, 0);
+    if (c_.triple_on_at(2 * p + d)) visit(at + 3, 1, 2 * p + d, 1);
+    if (pv >= 0 && c_.triple_on_at(2 * pv + d)) visit(at + 4, 1, 2 * pv + d, 2);
   }
-  if (c_.shear_on[p]) visit(GatherRow::kShear, 2, p, 0);
+  if (c_.shear_on_at(p)) visit(GatherRow::kShear, 2, p, 0);
   // p as corner 1, 2, 3 (along i, along j, across) of the cells below it.
   for (int k = 0; k < 3; ++k) {
     const int64_t q = c_.corner_at(k, p);

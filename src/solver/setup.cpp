@@ -121,9 +121,6 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   c.mass.assign(n, 0.0);  // held: every particle, at its grid id, until hold_particles
   c.flags.assign(n, kActive);
   c.level.assign(n, 0);
-  c.edge_on.assign(2 * n, 0);
-  c.triple_on.assign(2 * n, 0);
-  c.shear_on.assign(n, 0);
   for (int k = 0; k < 3; ++k) {
     c.cell[k].assign(n, -1);
     c.corner_of[k].assign(n, -1);

@@ -32,7 +32,7 @@ Zigzag count_zigzags(const Cloth& c, const std::vector<int64_t>& particles, cons
   for (int64_t p : particles)
     for (int d = 0; d < 2; ++d) {
       const int64_t q = c.next_at(d, p);
-      if (!c.triple_on[2 * p + d] || q < 0 || !c.triple_on[2 * q + d]) continue;
+      if (!c.triple_on_at(2 * p + d) || q < 0 || !c.triple_on_at(2 * q + d)) continue;
       double s[3], t[3];
       line_turn(c, p, d, s);
       line_turn(c, q, d, t);
