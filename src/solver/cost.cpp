@@ -611,12 +611,12 @@ void Evaluator::edge_bands(const ItemRun& run, int64_t k, const double L[4], con
               slopes ? &gq_e_[pos] : nullptr, slopes ? &gf_e_[pos] : nullptr);
 }
 
-void Evaluator::triple_bands(const ItemRun& run, int64_t k, const double th[4], const V g[4][3], const double* z,
-                             double* settle) {
+void Evaluator::triple_bands(const ItemRun& run, int64_t k, const int64_t ids[4][3], const double th[4],
+                             const V g[4][3], const double* z, double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
   double rest[4];
-  for (int l = 0; l < 4; ++l) rest[l] = triple_rest(s[l], pos + l);
+  for (int l = 0; l < 4; ++l) rest[l] = triple_rest_of(s[l], ids[l]);
   const D4 Lm = loadu4(rest), w = loadu4(&width_t_[pos]);
   const D4 q = loadu4(th) / Lm;
   double rev[4], f[4];
@@ -646,7 +646,7 @@ void Evaluator::triple_forces(int64_t s, int64_t pos, const double* z, double* s
   V g[3];
   const V n = load3<double>(&axis_t_[3 * pos]);
   const double th = bend_angle(at(z, ids[0]), at(z, ids[1]), at(z, ids[2]), n, g);
-  triple_band(s, pos, th, g, z, settle);
+  triple_band(s, pos, triple_rest_of(s, ids), th, g, z, settle);
 }
 
 void Evaluator::triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const {
@@ -672,17 +672,21 @@ void Evaluator::triple_forces(const ItemRun& run, const double* z, double* settl
         bend_terms_four(t, g, sn, co);
         turn_atan2_four(sn, co, th);
 #if DRAPE_LANES
-        triple_bands(run, k, th, g, z, settle);
+        triple_bands(run, k, ids, th, g, z, settle);
 #else
-        for (int l = 0; l < 4; ++l) triple_band(run.items[k + l], run.base + k + l, th[l], g[l], z, settle);
+        for (int l = 0; l < 4; ++l) {
+          const int64_t s = run.items[k + l];
+          triple_band(s, run.base + k + l, triple_rest_of(s, ids[l]), th[l], g[l], z, settle);
+        }
 #endif
       },
       [&](int64_t k) { triple_forces(run.items[k], run.base + k, z, settle); });
 }
 
-void Evaluator::triple_band(int64_t s, int64_t pos, double th, const V g[3], const double* z, double* settle) {
+void Evaluator::triple_band(int64_t s, int64_t pos, double Lm, double th, const V g[3], const double* z,
+                            double* settle) {
   const int d = int(s & 1);
-  const double Lm = triple_rest(s, pos), w = width_t_[pos];
+  const double w = width_t_[pos];
   const BandValue bv = m_.bend[d].at(th / Lm);
   const Band::Stop st = m_.bend[d].stop(anc_t_[pos], bv);
   active_.note(1, pos, th / Lm, bv, st);
@@ -708,7 +712,7 @@ void Evaluator::shear_forces(int64_t s, int64_t pos, const double* z, double* se
   const CellAt a = cell_at(ids, z);
   V g[4];
   const double phi = shear_cell(a.x, g);
-  const double A = cell_area_at(s, pos);
+  const double A = cell_area_of(ids);
   const BandValue bv = m_.shear.at(phi);
   const Band::Stop st = m_.shear.stop(anc_s_[pos], bv);
   active_.note(2, pos, phi, bv, st);
@@ -733,15 +737,16 @@ void Evaluator::shear_forces(const ItemRun& run, const double* z, double* settle
   in_fours(
       run,
       [&](int64_t k) {
-        double phi[4], sn[4][4], co[4][4];
+        double area[4], phi[4], sn[4][4], co[4][4];
         V g[4][4];
         for (int l = 0; l < 4; ++l) {
           int64_t ids[4];
           cell_ids(run.items[k + l], run.base + k + l, ids);
           shear_cell_terms(cell_at(ids, z).x, g[l], sn[l], co[l]);
+          area[l] = cell_area_of(ids);
         }
         shear_angles_four(sn, co, phi);
-        shear_bands(run, k, phi, g, z, settle);
+        shear_bands(run, k, area, phi, g, z, settle);
       },
       [&](int64_t k) { shear_forces(run.items[k], run.base + k, z, settle); });
 #else
@@ -750,15 +755,12 @@ void Evaluator::shear_forces(const ItemRun& run, const double* z, double* settle
 }
 
 #if DRAPE_LANES
-void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V g[4][4], const double* z,
-                            double* settle) {
+void Evaluator::shear_bands(const ItemRun& run, int64_t k, const double area[4], const double phi[4],
+                            const V g[4][4], const double* z, double* settle) {
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
-  double area[4], root[4];
-  for (int l = 0; l < 4; ++l) {
-    area[l] = cell_area_at(s[l], pos + l);
-    root[l] = std::sqrt(area[l]);
-  }
+  double root[4];
+  for (int l = 0; l < 4; ++l) root[l] = std::sqrt(area[l]);
   const D4 A = loadu4(area), rest = loadu4(root);
   const int64_t one[4] = {0, 0, 0, 0};  // one band for every cell
   const BandFour b4 = bands_four(m_.shear, m_.shear, one, loadu4(phi));
@@ -906,7 +908,7 @@ void Evaluator::shear_gradient(int64_t s, int64_t pos, const double* z, double* 
   for (int k = 0; k < 4; ++k) r[k] = residual_of(c_, rho_grid_, ids[k]);
   V g[4], hr[4];
   shear_cell_hv(a.x, r, g, hr);
-  const double A = cell_area_at(s, pos), f = z[c_.force_index(2, s)];
+  const double A = cell_area_of(ids), f = z[c_.force_index(2, s)];
   const double fa = f * A / m_.force_scale, gq = gq_s_[pos];
   double gr = 0;
   for (int k = 0; k < 4; ++k) {
@@ -932,7 +934,7 @@ void Evaluator::shear_gradient_four(const ItemRun& run, int64_t k, const double*
   const int64_t* s = run.items + k;
   const int64_t pos = run.base + k;
   V x[4][4], r[4][4];  // corner, cell
-  double f[4];
+  double f[4], area[4];
   for (int l = 0; l < 4; ++l) {
     int64_t ids[4];
     cell_ids(s[l], pos + l, ids);
@@ -941,6 +943,7 @@ void Evaluator::shear_gradient_four(const ItemRun& run, int64_t k, const double*
       r[c][l] = residual_of(c_, rho_grid_, ids[c]);
     }
     f[l] = z[c_.force_index(2, s[l])];
+    area[l] = cell_area_of(ids);
   }
   V4 X[4], R[4], G[4], H[4];
   for (int c = 0; c < 4; ++c) {
@@ -948,8 +951,6 @@ void Evaluator::shear_gradient_four(const ItemRun& run, int64_t k, const double*
     R[c] = lanes4(r[c]);
   }
   shear_cells_hv_four(X, R, G, H);
-  double area[4];
-  for (int l = 0; l < 4; ++l) area[l] = cell_area_at(s[l], pos + l);
   const D4 A = loadu4(area), scale = splat4(m_.force_scale);
   const D4 fa = loadu4(f) * A / scale, gq = loadu4(&gq_s_[pos]);
   D4 gr = splat4(0.0);

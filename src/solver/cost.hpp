@@ -305,12 +305,14 @@ class Evaluator {
   void triple_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
   // A run of the triples' list, four triples' angles at a time (TripleFour).
   void triple_forces(const ItemRun& run, const double* z, double* settle);
-  // The triple's band, force and cost from its angle th and its gradient g.
-  void triple_band(int64_t s, int64_t pos, double th, const V3<double> g[3], const double* z, double* settle);
-  // The four triples at run positions k..k+3 (angles th, gradients g),
-  // likewise: triple_band's numbers bit for bit.
-  void triple_bands(const ItemRun& run, int64_t k, const double th[4], const V3<double> g[4][3], const double* z,
-                    double* settle);
+  // The triple's band, force and cost from its rest length Lm, its angle th
+  // and its gradient g.
+  void triple_band(int64_t s, int64_t pos, double Lm, double th, const V3<double> g[3], const double* z,
+                   double* settle);
+  // The four triples at run positions k..k+3 (particles ids, angles th,
+  // gradients g), likewise: triple_band's numbers bit for bit.
+  void triple_bands(const ItemRun& run, int64_t k, const int64_t ids[4][3], const double th[4],
+                    const V3<double> g[4][3], const double* z, double* settle);
   // The four triples at run positions k..k+3: their positions and axes, their particles.
   void triple_four(const ItemRun& run, int64_t k, const double* z, TripleFour& t, int64_t ids[4][3]) const;
   void shear_forces(int64_t s, int64_t pos, const double* z, double* settle = nullptr);
@@ -318,8 +320,9 @@ class Evaluator {
   // at a time (shear_angles_four, shear_bands), shear_forces' numbers bit
   // for bit; else cell by cell.
   void shear_forces(const ItemRun& run, const double* z, double* settle);
-  void shear_bands(const ItemRun& run, int64_t k, const double phi[4], const V3<double> g[4][4], const double* z,
-                   double* settle);
+  // The four cells at run positions k..k+3 (areas A, angles phi, gradients g).
+  void shear_bands(const ItemRun& run, int64_t k, const double A[4], const double phi[4], const V3<double> g[4][4],
+                   const double* z, double* settle);
   CostTerms cost_pass(double* z, double* settle, bool grid);
   void size_slopes();
   // Sizes the arrays kept in list order (and the rows) for the lists now:
@@ -691,6 +694,13 @@ class Evaluator {
   double cell_area_at(int64_t s, int64_t pos) const {
     return cell_area(c_.grid, s, cell_corner(pos, 0), cell_corner(pos, 1));
   }
+  // The same from the particles triple_ids and cell_ids found: in Newton's
+  // runs each end is two lookups (local index, then grid id), not to be
+  // made twice an element.
+  double triple_rest_of(int64_t s, const int64_t ids[3]) const {
+    return triple_rest_length(c_.grid, int(s & 1), ids[0], ids[1], ids[2]);
+  }
+  double cell_area_of(const int64_t ids[4]) const { return cell_area(c_.grid, ids[0], ids[1], ids[2]); }
   // Each element's band anchor (hysteresis_anchors), in list order too.
   std::vector<double> anc_e_, anc_t_, anc_s_;
   BandActiveSet active_;  // the elements' branches (off unless track_branches)
