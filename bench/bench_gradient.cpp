@@ -267,7 +267,7 @@ void BM_CgIteration(benchmark::State& state) {
   }
   state.counters["iterations"] = iterations;
   state.counters["s_per_iteration"] =
-      benchmark::Counter(iterations, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+      benchmark::Counter(iterations, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_CgIteration)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
 
