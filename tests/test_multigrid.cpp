@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <random>
 
@@ -105,6 +106,41 @@ TEST(Multigrid, ProlongationInterpolatesAndSkipsNonUnknowns) {
   for (size_t k = 0; k < yf.size(); ++k) a += px[k] * yf[k];
   for (size_t k = 0; k < xc.size(); ++k) b += xc[k] * ry[k];
   EXPECT_NEAR(a, b, 1e-12 * std::fabs(a));
+}
+
+// The bilinear P's transfers and Galerkin product read each block's w alone;
+// they must give the 3 x 3 block sums' results bit for bit (the same cycle,
+// the same run).
+TEST(Multigrid, BilinearShortcutsMatchTheBlockSumsBitForBit) {
+  const int n = 17;
+  Stretched s(n);
+  const std::vector<int64_t>& fine = s.ids();
+  const std::vector<int64_t> coarse = coarse_points(fine, n, n, 1);
+  std::vector<int32_t> scratch(size_t(n) * n, -1);
+  const Prolongation P = make_prolongation(fine, coarse, n, n, 1, scratch);
+  ASSERT_TRUE(P.scalar);
+  Prolongation B = P;
+  B.scalar = false;  // the general 3 x 3 block sums
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> xc(3 * coarse.size()), rf(3 * fine.size());
+  for (double& v : xc) v = u(rng);
+  for (double& v : rf) v = u(rng);
+  std::vector<double> xp = rf, xb = rf, rp(xc.size()), rb(xc.size());
+  prolong_add(P, xc.data(), xp.data());
+  prolong_add(B, xc.data(), xb.data());
+  EXPECT_EQ(0, std::memcmp(xp.data(), xb.data(), xp.size() * sizeof(double)));
+  restrict_to(P, rf.data(), rp.data());
+  restrict_to(B, rf.data(), rb.data());
+  EXPECT_EQ(0, std::memcmp(rp.data(), rb.data(), rp.size() * sizeof(double)));
+  BlockMatrix APp, Acp, APb, Acb;
+  galerkin(s.K, P, APp, Acp, true);
+  galerkin(s.K, B, APb, Acb, true);
+  ASSERT_EQ(Acp.col, Acb.col);
+  ASSERT_EQ(Acp.val.size(), Acb.val.size());
+  EXPECT_EQ(0, std::memcmp(Acp.val.data(), Acb.val.data(), Acp.val.size() * sizeof(double)));
+  galerkin(s.K, P, APp, Acp, false);  // the kept patterns' values again
+  EXPECT_EQ(0, std::memcmp(Acp.val.data(), Acb.val.data(), Acp.val.size() * sizeof(double)));
 }
 
 // The graph Laplacian of an n x n grid (4-neighbours), blocks of L_fg I:

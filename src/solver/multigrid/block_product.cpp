@@ -29,7 +29,11 @@ void product_pattern(const BlockMatrix& A, const BlockMatrix& B, BlockMatrix& C)
 }
 }  // namespace
 
-void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern) {
+namespace {
+// C = A B with `add(a, b, c)` adding block a times block b into c: row r's
+// sums in A's then B's column order, whatever the blocks' kind.
+template <class Add>
+void product_rows(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern, Add&& add) {
   if (pattern) product_pattern(A, B, C);
   SlotMaps& slots = scratch().slots;
   slots.size(omp_get_max_threads(), cols);
@@ -45,11 +49,32 @@ void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, Blo
       for (int64_t k = A.start[r]; k < A.start[r + 1]; ++k) {
         const int64_t g = A.col[k];
         const double* a = &A.val[9 * k];
-        for (int64_t b = B.start[g]; b < B.start[g + 1]; ++b) add_block_product(a, &B.val[9 * b], &C.val[9 * slot[B.col[b]]]);
+        for (int64_t b = B.start[g]; b < B.start[g + 1]; ++b) add(a, &B.val[9 * b], &C.val[9 * slot[B.col[b]]]);
       }
       for (int64_t k = C.start[r]; k < C.start[r + 1]; ++k) slot[C.col[k]] = -1;
     }
   }
+}
+}  // namespace
+
+void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern) {
+  product_rows(A, B, cols, C, pattern, [](const double* a, const double* b, double* c) { add_block_product(a, b, c); });
+}
+
+void block_product_scalar_right(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C,
+                                bool pattern) {
+  product_rows(A, B, cols, C, pattern, [](const double* __restrict a, const double* b, double* __restrict c) {
+    const double w = b[0];
+    for (int i = 0; i < 9; ++i) c[i] += a[i] * w;
+  });
+}
+
+void block_product_scalar_left(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C,
+                               bool pattern) {
+  product_rows(A, B, cols, C, pattern, [](const double* a, const double* __restrict b, double* __restrict c) {
+    const double w = a[0];
+    for (int i = 0; i < 9; ++i) c[i] += w * b[i];
+  });
 }
 
 }  // namespace drape

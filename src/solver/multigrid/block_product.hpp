@@ -11,5 +11,9 @@ namespace drape {
 
 // `cols`: B's column count. C's pattern is set when `pattern` (else kept).
 void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern);
+// The same where B's (right) or A's (left) blocks are all w I: the same sums
+// bit for bit (add_block_product's other terms are exact zeros), w read alone.
+void block_product_scalar_right(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern);
+void block_product_scalar_left(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C, bool pattern);
 
 }  // namespace drape

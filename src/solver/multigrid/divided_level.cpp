@@ -274,8 +274,9 @@ void DividedLevel::level_one(const BlockMatrix& mine, const Multigrid& mg, bool 
   const Prolongation& P = mg.finest_transfer();
   const BlockMatrix& T = P.T;
   const int64_t nc = P.coarse();
-  block_product(mine, P.P, nc, ap_own_, pattern);
-  block_product(ring_k_, P.P, nc, ap_ring_, pattern);
+  auto times_p = P.scalar ? block_product_scalar_right : block_product;
+  times_p(mine, P.P, nc, ap_own_, pattern);
+  times_p(ring_k_, P.P, nc, ap_ring_, pattern);
   // Fine row of the layout -> its row of K P (this rank's, or the ring's).
   auto ap = [&](int32_t i, int64_t& row) -> const BlockMatrix& {
     if (i < own_) {
@@ -307,8 +308,15 @@ void DividedLevel::level_one(const BlockMatrix& mine, const Multigrid& mg, bool 
         const double* t = &T.val[9 * (T.start[c] + k - tstart_[j])];
         int64_t row;
         const BlockMatrix& M = ap(tcol_[k], row);
-        for (int64_t b = M.start[row]; b < M.start[row + 1]; ++b)
-          add_block_product(t, &M.val[9 * b], &a1_mine_.val[9 * slot[M.col[b]]]);
+        if (P.scalar)  // t = w I: the same sums, w read alone (block_product_scalar_left)
+          for (int64_t b = M.start[row]; b < M.start[row + 1]; ++b) {
+            const double* m = &M.val[9 * b];
+            double* a1 = &a1_mine_.val[9 * slot[M.col[b]]];
+            for (int i = 0; i < 9; ++i) a1[i] += t[0] * m[i];
+          }
+        else
+          for (int64_t b = M.start[row]; b < M.start[row + 1]; ++b)
+            add_block_product(t, &M.val[9 * b], &a1_mine_.val[9 * slot[M.col[b]]]);
       }
       for (int64_t k = a1_mine_.start[j]; k < a1_mine_.start[j + 1]; ++k) slot[a1_mine_.col[k]] = -1;
     }

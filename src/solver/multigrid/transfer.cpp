@@ -62,6 +62,7 @@ Prolongation make_prolongation(const std::vector<int64_t>& fine_ids, const std::
   }
   for (int64_t p : coarse_ids) scratch[p] = -1;
   transpose(P, int64_t(coarse_ids.size()), out.T);
+  out.scalar = true;
   return out;
 }
 
@@ -84,15 +85,50 @@ void transpose(const BlockMatrix& P, int64_t coarse, BlockMatrix& T) {
 
 void prolong_add(const Prolongation& P, const double* xc, double* xf) {
   const BlockMatrix& M = P.P;
+  if (P.scalar) {
+#pragma omp parallel for schedule(static)
+    for (int64_t f = 0; f < M.rows; ++f)
+      for (int64_t k = M.start[f]; k < M.start[f + 1]; ++k) {
+        const double w = M.val[9 * k];
+        const double* x = xc + 3 * int64_t(M.col[k]);
+        for (int i = 0; i < 3; ++i) xf[3 * f + i] += w * x[i];
+      }
+    return;
+  }
 #pragma omp parallel for schedule(static)
   for (int64_t f = 0; f < M.rows; ++f)
     for (int64_t k = M.start[f]; k < M.start[f + 1]; ++k)
       add_block_times(&M.val[9 * k], xc + 3 * int64_t(M.col[k]), 1.0, xf + 3 * f);
 }
 
-void restrict_to(const Prolongation& P, const double* rf, double* bc) { P.T.multiply(rf, bc); }
+void restrict_to(const Prolongation& P, const double* rf, double* bc) {
+  if (!P.scalar) {
+    P.T.multiply(rf, bc);
+    return;
+  }
+  const BlockMatrix& T = P.T;
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < T.rows; ++c) {
+    double y0 = 0, y1 = 0, y2 = 0;  // row_times' sums, w's zeros left out
+    for (int64_t k = T.start[c]; k < T.start[c + 1]; ++k) {
+      const double w = T.val[9 * k];
+      const double* x = rf + 3 * int64_t(T.col[k]);
+      y0 += w * x[0];
+      y1 += w * x[1];
+      y2 += w * x[2];
+    }
+    bc[3 * c] = y0;
+    bc[3 * c + 1] = y1;
+    bc[3 * c + 2] = y2;
+  }
+}
 
 void galerkin(const BlockMatrix& A, const Prolongation& P, BlockMatrix& AP, BlockMatrix& Ac, bool pattern) {
+  if (P.scalar) {
+    block_product_scalar_right(A, P.P, P.coarse(), AP, pattern);
+    block_product_scalar_left(P.T, AP, P.coarse(), Ac, pattern);
+    return;
+  }
   block_product(A, P.P, P.coarse(), AP, pattern);
   block_product(P.T, AP, P.coarse(), Ac, pattern);
 }
