@@ -18,7 +18,8 @@
 # edges cut into it and split for that (the inside mask, which each rank
 # computes for its own particles): it must do so at least once. The
 # multigrid case is the Newton case with the multigrid preconditioner and
-# the slope line search (self-contact on, as by default), whose finest level
+# the slope line search (self-contact and friction on, as by default: its
+# state must differ from a frictionless run's), whose finest level
 # each rank builds and runs on its own rows of K and a ring of others' (level
 # 1's rows and right-hand side gathered; the levels below whole on every
 # rank); it
@@ -123,6 +124,12 @@ for method in $cases; do
     [[ $(sum "$work/multigrid-restart") == $(sum "$work/multigrid-1") ]] ||
       { echo "multigrid: 2 ranks to step 20, then 3 ranks: $(sum "$work/multigrid-restart"), not $(sum "$work/multigrid-1")"; exit 1; }
     echo "multigrid: restarted on 3 ranks from 2 ranks' step 20: the same state"
+    # Friction (on by default) held the cloth on the box during the run.
+    OMP_NUM_THREADS=1 "$drape" "${args[@]}" --set obstacle.friction=0 --set obstacle.floor_friction=0 \
+      --output "$work/multigrid-frictionless" >/dev/null
+    [[ $(sum "$work/multigrid-1") != $(sum "$work/multigrid-frictionless") ]] ||
+      { echo "multigrid: the same state as without friction: the case does not cover friction"; exit 1; }
+    echo "multigrid: friction changed the state (frictionless $(sum "$work/multigrid-frictionless"))"
   fi
   if [[ $method == kinks ]]; then
     "$drape" "${args[@]}" --set solver.band_active_set=false --output "$work/kinks-off" >/dev/null

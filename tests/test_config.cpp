@@ -98,9 +98,12 @@ const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 TEST(Config, DefaultSceneIsSceneDefaults) {
   const Scene s = drape::load_scene(std::nullopt, {});
   expect_same(s, Scene{});
-  // The paper's scene: a 1000 x 1000 cloth over a box.
+  // The paper's scene: a 1000 x 1000 cloth over a box, with friction on the
+  // box and the floor (denim's mu, docs/validation.md).
   EXPECT_EQ(s.cloth.particles, (std::array<int, 2>{1000, 1000}));
   EXPECT_EQ(s.obstacle.shape, drape::ObstacleShape::Box);
+  EXPECT_EQ(s.obstacle.friction, 0.3);
+  EXPECT_EQ(s.obstacle.floor_friction, 0.3);
 }
 
 // box.toml spells out the default scene: each key it sets is at its default.

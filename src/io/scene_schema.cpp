@@ -68,9 +68,11 @@ void declare_obstacle(ParameterList& list) {
       .add("floor", &ObstacleSpec::floor, "", any(), "plane z = 0", "a floor plane at z = 0").example("false")
       .add("friction", &ObstacleSpec::friction, "", non_negative(), "Coulomb mu on the box, sphere or disc (0: none)",
            "Coulomb friction coefficient μ between cloth and the box, sphere or disc (one μ, static and kinetic); "
-           "0 is frictionless").example("0.3")
+           "0 is frictionless. The default is denim's measured coefficient ([validation.md]"
+           "(validation.md#friction-coefficients))").example("0.5")
       .add("floor_friction", &ObstacleSpec::floor_friction, "", non_negative(), "Coulomb mu on the floor (0: none)",
-           "Coulomb friction coefficient μ between cloth and the floor; 0 is frictionless").example("0.5");
+           "Coulomb friction coefficient μ between cloth and the floor; 0 is frictionless. The default as "
+           "`obstacle.friction`'s").example("0.5");
 }
 
 void declare_solver(ParameterList& list) {

@@ -50,8 +50,10 @@ struct ObstacleSpec {
   std::array<double, 3> size{0.4, 0.4, 0.4};    // m, box edge lengths (disc: size[2] its thickness)
   double radius = 0.2;                          // m, sphere or disc
   bool floor = true;                            // plane z = 0
-  double friction = 0;                          // Coulomb mu, cloth on the box, sphere or disc
-  double floor_friction = 0;                    // Coulomb mu, cloth on the floor
+  // Coulomb mu, on by default: denim's measured coefficient (docs/validation.md,
+  // "Friction coefficients"); 0 is frictionless.
+  double friction = 0.3;                        // cloth on the box, sphere or disc
+  double floor_friction = 0.3;                  // cloth on the floor
 };
 
 struct SolverSpec {

@@ -11,6 +11,8 @@
 namespace drape::test {
 
 // A scene with no obstacle: n x n particles of spacing h, flat at height z.
+// Frictionless, so that a test adding a floor or a sphere measures what it
+// names; the tests of friction turn it on themselves.
 inline Scene flat_scene(int ni, int nj, double size_i, double size_j) {
   Scene s;
   s.cloth.particles = {ni, nj};
@@ -18,6 +20,8 @@ inline Scene flat_scene(int ni, int nj, double size_i, double size_j) {
   s.cloth.tile = 4;
   s.obstacle.shape = ObstacleShape::None;
   s.obstacle.floor = false;
+  s.obstacle.friction = 0;
+  s.obstacle.floor_friction = 0;
   return s;
 }
 
