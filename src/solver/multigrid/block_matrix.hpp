@@ -125,6 +125,12 @@ inline void add_block_product(const double* __restrict a, const double* __restri
     for (int j = 0; j < 3; ++j) out[3 * i + j] += a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
 }
 
+// out += w b: add_block_product where one factor is w I (the bilinear P's
+// blocks), the same sums with its exact zeros left out.
+inline void add_scaled_block(double w, const double* __restrict b, double* __restrict out) {
+  for (int i = 0; i < 9; ++i) out[i] += w * b[i];
+}
+
 // The inverse of a symmetric positive definite 3 x 3 block (by cofactors);
 // false where it is not invertible.
 bool invert_block(const double* a, double* inv);

@@ -63,18 +63,12 @@ void block_product(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, Blo
 
 void block_product_scalar_right(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C,
                                 bool pattern) {
-  product_rows(A, B, cols, C, pattern, [](const double* __restrict a, const double* b, double* __restrict c) {
-    const double w = b[0];
-    for (int i = 0; i < 9; ++i) c[i] += a[i] * w;
-  });
+  product_rows(A, B, cols, C, pattern, [](const double* a, const double* b, double* c) { add_scaled_block(b[0], a, c); });
 }
 
 void block_product_scalar_left(const BlockMatrix& A, const BlockMatrix& B, int64_t cols, BlockMatrix& C,
                                bool pattern) {
-  product_rows(A, B, cols, C, pattern, [](const double* a, const double* __restrict b, double* __restrict c) {
-    const double w = a[0];
-    for (int i = 0; i < 9; ++i) c[i] += w * b[i];
-  });
+  product_rows(A, B, cols, C, pattern, [](const double* a, const double* b, double* c) { add_scaled_block(a[0], b, c); });
 }
 
 }  // namespace drape

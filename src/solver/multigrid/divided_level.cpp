@@ -308,12 +308,9 @@ void DividedLevel::level_one(const BlockMatrix& mine, const Multigrid& mg, bool 
         const double* t = &T.val[9 * (T.start[c] + k - tstart_[j])];
         int64_t row;
         const BlockMatrix& M = ap(tcol_[k], row);
-        if (P.scalar)  // t = w I: the same sums, w read alone (block_product_scalar_left)
-          for (int64_t b = M.start[row]; b < M.start[row + 1]; ++b) {
-            const double* m = &M.val[9 * b];
-            double* a1 = &a1_mine_.val[9 * slot[M.col[b]]];
-            for (int i = 0; i < 9; ++i) a1[i] += t[0] * m[i];
-          }
+        if (P.scalar)  // t = w I: the same sums, w read alone
+          for (int64_t b = M.start[row]; b < M.start[row + 1]; ++b)
+            add_scaled_block(t[0], &M.val[9 * b], &a1_mine_.val[9 * slot[M.col[b]]]);
         else
           for (int64_t b = M.start[row]; b < M.start[row + 1]; ++b)
             add_block_product(t, &M.val[9 * b], &a1_mine_.val[9 * slot[M.col[b]]]);
