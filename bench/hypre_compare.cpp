@@ -134,7 +134,7 @@ Result boomeramg_solve(const AmgConfig& cfg, const BlockMatrix& K, const std::ve
       HYPRE_Int c = 0;
       for (int64_t e = K.start[br]; e < K.start[br + 1]; ++e)
         for (int j = 0; j < 3; ++j) {
-          const double v = K.val[9 * e + 3 * i + j];
+          const double v = K.val[9 * e + entry(i, j)];
           const HYPRE_Int col = HYPRE_Int(3 * K.col[e] + j);
           if (v == 0 && col != row) continue;
           cols.push_back(col);

@@ -269,8 +269,8 @@ void two_functions(const BlockMatrix& K, const std::vector<int64_t>& ids, int n,
       for (int64_t q = P0.P.start[f]; q < P0.P.start[f + 1]; ++q) {
         const double w = P0.P.val[9 * q];
         P.P.col.push_back(int32_t(P0.P.col[q] + set * nc));
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
+        for (int j = 0; j < 3; ++j)  // column-major, as BlockMatrix stores blocks
+          for (int i = 0; i < 3; ++i)
             P.P.val.push_back(set ? w * t[size_t(3 * (set - 1) + j) * m + 3 * f + i] : (i == j ? w : 0.0));
       }
     P.P.start[f + 1] = int64_t(P.P.col.size());

@@ -13,6 +13,7 @@
 #include <functional>
 #include <random>
 
+#include "solver/multigrid/block_product.hpp"
 #include "solver/multigrid/multigrid.hpp"
 #include "support/scenes.hpp"
 
@@ -174,6 +175,80 @@ BlockMatrix grid_laplacian(const std::vector<int64_t>& ids, int n) {
 // around a point, and linear fields (rigid translations and, to first order,
 // rotations) in the interior; yet it is not P0: wider, and different on a
 // rough coarse vector.
+// A matrix of random blocks (no symmetry) on rows of 0 to 12 blocks, the
+// last row full, so that the array's last block is read by a row.
+BlockMatrix random_blocks(int64_t rows, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<std::vector<int32_t>> cols(static_cast<size_t>(rows));
+  for (int64_t r = 0; r < rows; ++r) {
+    const int n = r + 1 == rows ? 12 : int(rng() % 13);
+    for (int k = 0; k < n; ++k) cols[size_t(r)].push_back(int32_t(rng() % uint64_t(rows)));
+    std::sort(cols[size_t(r)].begin(), cols[size_t(r)].end());
+    cols[size_t(r)].erase(std::unique(cols[size_t(r)].begin(), cols[size_t(r)].end()), cols[size_t(r)].end());
+  }
+  BlockMatrix A;
+  A.set_pattern(cols);
+  for (double& v : A.val) v = u(rng) * std::pow(10.0, double(rng() % 9) - 4.0);  // magnitudes 1e-4..1e4: rounding shows
+  return A;
+}
+
+TEST(MultigridBlocks, VectorRowsMatchThePlainSumsBitForBit) {
+  const BlockMatrix A = random_blocks(300, 7);
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> x(3 * size_t(A.rows)), b(x.size()), y(x.size()), r(x.size()), ref(x.size()), refr(x.size());
+  for (double& v : x) v = u(rng);
+  for (double& v : b) v = u(rng);
+  for (int64_t i = 0; i < A.rows; ++i) {
+    const int64_t s = A.start[i];
+    row_times_reference(&A.val[9 * s], &A.col[s], A.start[i + 1] - s, x.data(), &ref[3 * i]);
+    for (int k = 0; k < 3; ++k) refr[3 * i + k] = b[3 * i + k] - ref[3 * i + k];
+  }
+  A.multiply(x.data(), y.data());
+  A.residual(b.data(), x.data(), r.data());
+  EXPECT_EQ(0, std::memcmp(y.data(), ref.data(), y.size() * sizeof(double)));
+  EXPECT_EQ(0, std::memcmp(r.data(), refr.data(), r.size() * sizeof(double)));
+}
+
+// Every reader takes a stored block's entry (i, j) for the same matrix
+// entry: the product, the block product and the row-major copy against
+// dense sums of entry(i, j).
+TEST(MultigridBlocks, BlocksAreColumnMajorForEveryReader) {
+  const int64_t n = 40;
+  const BlockMatrix A = random_blocks(n, 11), B = random_blocks(n, 12);
+  auto dense = [n](const BlockMatrix& M) {
+    std::vector<double> d(size_t(9 * n * n), 0.0);
+    for (int64_t r = 0; r < n; ++r)
+      for (int64_t k = M.start[r]; k < M.start[r + 1]; ++k)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) d[size_t((3 * r + i) * 3 * n + 3 * M.col[k] + j)] = M.val[size_t(9 * k + entry(i, j))];
+    return d;
+  };
+  const std::vector<double> da = dense(A), db = dense(B);
+  std::vector<double> x(3 * size_t(n)), y(x.size());
+  for (size_t i = 0; i < x.size(); ++i) x[i] = double(i % 7) - 3.0;
+  A.multiply(x.data(), y.data());
+  for (int64_t i = 0; i < 3 * n; ++i) {
+    double s = 0;
+    for (int64_t j = 0; j < 3 * n; ++j) s += da[size_t(i * 3 * n + j)] * x[size_t(j)];
+    EXPECT_NEAR(y[size_t(i)], s, 1e-9 * (1 + std::abs(s))) << i;
+  }
+  BlockMatrix C;
+  block_product(A, B, n, C, true);
+  const std::vector<double> dc = dense(C);
+  for (int64_t i = 0; i < 3 * n; ++i)
+    for (int64_t j = 0; j < 3 * n; ++j) {
+      double s = 0;
+      for (int64_t k = 0; k < 3 * n; ++k) s += da[size_t(i * 3 * n + k)] * db[size_t(k * 3 * n + j)];
+      EXPECT_NEAR(dc[size_t(i * 3 * n + j)], s, 1e-6 * (1 + std::abs(s))) << i << ' ' << j;
+    }
+  double rm[9];
+  to_row_major(&A.val[0], rm);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(rm[3 * i + j], da[size_t(i * 3 * n + 3 * A.col[0] + j)]);
+}
+
 TEST(Multigrid, SmoothedProlongationKeepsConstantsAndLinearFields) {
   const int n = 17;
   std::vector<int64_t> fine;
@@ -701,7 +776,7 @@ TEST(CoarseSolve, AgreesWithEigensLdlt) {
     for (int64_t r = 0; r < A->rows; ++r)
       for (int64_t k = A->start[r]; k < A->start[r + 1]; ++k)
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) t.emplace_back(int(3 * r + i), int(3 * A->col[k] + j), A->val[size_t(9 * k + 3 * i + j)]);
+          for (int j = 0; j < 3; ++j) t.emplace_back(int(3 * r + i), int(3 * A->col[k] + j), A->val[size_t(9 * k + entry(i, j))]);
     Eigen::SparseMatrix<double> E(n, n);
     E.setFromTriplets(t.begin(), t.end());
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ref(E);

@@ -206,7 +206,8 @@ void Evaluator::assemble_stiffness(BlockMatrix& K, const std::vector<int32_t>* c
       std::fill(K.val.begin() + 9 * K.start[r], K.val.begin() + 9 * K.start[r + 1], 0.0);
       row_terms(r, [&](int32_t c, double w, const double* blk) {
         double* out = &K.val[9 * slot[c]];
-        for (int i = 0; i < 9; ++i) out[i] += w * blk[i];
+        for (int i = 0; i < 3; ++i)  // blk row-major, K's blocks column-major
+          for (int j = 0; j < 3; ++j) out[entry(i, j)] += w * blk[3 * i + j];
       });
       for (int64_t k = K.start[r]; k < K.start[r + 1]; ++k) slot[K.col[k]] = -1;
     }

@@ -74,7 +74,7 @@ void CoarseSolve::set_pattern(const BlockMatrix& A) {
             const int64_t row = 3 * r + i, col = 3 * int64_t(A.col[k]) + j;
             if (row < col) continue;
             const int64_t a = inv_[size_t(row)], b = inv_[size_t(col)];
-            f(std::min(a, b), std::max(a, b), 9 * k + 3 * i + j);
+            f(std::min(a, b), std::max(a, b), 9 * k + entry(i, j));
           }
   };
   each_lower([&](int64_t, int64_t c, int64_t) { ++ap_[size_t(c + 1)]; });

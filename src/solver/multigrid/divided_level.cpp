@@ -222,7 +222,9 @@ void DividedLevel::finest_smoother(const Reducer& red, const BlockMatrix& mine, 
 #pragma omp parallel for schedule(static) reduction(+ : bad)
   for (int64_t i = 0; i < own_; ++i) {
     const double* a = mine.block(i, int32_t(global_[i]));
-    bad += !(a && invert_block(a, &dinv_[9 * i]));
+    double rm[9];
+    if (a) to_row_major(a, rm);
+    bad += !(a && invert_block(rm, &dinv_[9 * i]));
   }
   if (red.sum_i64(bad) > 0) throw std::runtime_error("multigrid: a particle's diagonal block is singular");
   exchange(red, dinv_.data(), 9);
@@ -389,7 +391,7 @@ void DividedLevel::prolong(const Prolongation& P, int64_t rows, double* x) const
   for (int64_t r = 0; r < rows; ++r) {
     const int64_t f = rows_[r];
     for (int64_t k = M.start[f]; k < M.start[f + 1]; ++k)
-      add_block_times(&M.val[9 * k], x1_.data() + 3 * int64_t(M.col[k]), 1.0, x + 3 * r);
+      add_stored_block_times(&M.val[9 * k], x1_.data() + 3 * int64_t(M.col[k]), x + 3 * r);
   }
 }
 

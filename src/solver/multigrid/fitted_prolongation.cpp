@@ -73,7 +73,7 @@ void fit_component(const std::vector<double>& v, int count, int64_t m, const std
     c -= ((c.sum() - rowsum) / g1.sum()) * g1;
   }
   for (int b = 0; b < k; ++b) {
-    for (int j = 0; j < 3; ++j) out[9 * b + 3 * i + j] = 0.0;
+    for (int j = 0; j < 3; ++j) out[9 * b + entry(i, j)] = 0.0;
     out[9 * b + 4 * i] = c(b);
   }
 }
@@ -215,7 +215,7 @@ void fit_prolongation(const BlockMatrix& A, const Prolongation& P0, const std::v
     if (!keep_sums) {
       for (int64_t b = 0; b < k; ++b)
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) out[9 * b + 3 * i + j] = GR(3 * b + j, i);
+          for (int j = 0; j < 3; ++j) out[9 * b + entry(i, j)] = GR(3 * b + j, i);
       continue;
     }
     Rhs Ct = Rhs::Zero(n, 3);
@@ -226,7 +226,7 @@ void fit_prolongation(const BlockMatrix& A, const Prolongation& P0, const std::v
     const Rhs W = GR - GC * lam;  // W(3 b + j, i): row i, column j of block b
     for (int64_t b = 0; b < k; ++b)
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) out[9 * b + 3 * i + j] = W(3 * b + j, i);
+        for (int j = 0; j < 3; ++j) out[9 * b + entry(i, j)] = W(3 * b + j, i);
   }
   transpose(S, int64_t(fine_row.size()), P.T);
 }

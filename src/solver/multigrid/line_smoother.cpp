@@ -117,7 +117,7 @@ void LineSmoother::factor(Direction& d, const BlockMatrix& A) {
         }
         const int64_t j = q - dd;
         const double* a = A.block(row, d.order[j]);
-        if (a) std::copy(a, a + 9, w);
+        if (a) to_row_major(a, w);
         else std::fill(w, w + 9, 0.0);
         for (int e = dd + 1; e <= band && q - e >= q0; ++e)  // i = q - e < j
           sub_product_transposed(lq + 9 * (e - 1), &w_[9 * (size_t(band) * j + (e - dd - 1))], w);
@@ -125,7 +125,7 @@ void LineSmoother::factor(Direction& d, const BlockMatrix& A) {
       }
       double diag[9];
       const double* a = A.block(row, row);
-      if (a) std::copy(a, a + 9, diag);
+      if (a) to_row_major(a, diag);
       else std::fill(diag, diag + 9, 0.0);
       for (int dd = 1; dd <= band && q - dd >= q0; ++dd) sub_product_transposed(lq + 9 * (dd - 1), wq + 9 * (dd - 1), diag);
       ok = ok && invert_block(diag, &d.dinv[9 * q]);
@@ -179,9 +179,9 @@ void LineSmoother::sweep_colour(const Direction& d, int colour, const BlockMatri
         for (int64_t e = A.start[row], end = A.start[row + 1]; e < end; ++e, a += 9) {
           const double* xc = x + 3 * int64_t(A.col[e]);
           const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
-          y0 -= a[0] * x0 + a[1] * x1 + a[2] * x2;
-          y1 -= a[3] * x0 + a[4] * x1 + a[5] * x2;
-          y2 -= a[6] * x0 + a[7] * x1 + a[8] * x2;
+          y0 -= a[entry(0, 0)] * x0 + a[entry(0, 1)] * x1 + a[entry(0, 2)] * x2;
+          y1 -= a[entry(1, 0)] * x0 + a[entry(1, 1)] * x1 + a[entry(1, 2)] * x2;
+          y2 -= a[entry(2, 0)] * x0 + a[entry(2, 1)] * x1 + a[entry(2, 2)] * x2;
         }
       }
       double* rq = r + 3 * int64_t(d.colour_pos[k]);

@@ -24,7 +24,8 @@ void smooth_prolongation(const BlockMatrix& A, const std::vector<double>& dinv, 
       double* s = &S.val[9 * k];
       const double* ap = &AP0.val[9 * k];
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) s[3 * i + j] = -w * (di[3 * i] * ap[j] + di[3 * i + 1] * ap[3 + j] + di[3 * i + 2] * ap[6 + j]);
+        for (int j = 0; j < 3; ++j)
+          s[entry(i, j)] = -w * (di[3 * i] * ap[entry(0, j)] + di[3 * i + 1] * ap[entry(1, j)] + di[3 * i + 2] * ap[entry(2, j)]);
       if (k0 < P0.P.start[f + 1] && P0.P.col[k0] == S.col[k]) {
         for (int i = 0; i < 9; ++i) s[i] += P0.P.val[9 * k0 + i];
         ++k0;

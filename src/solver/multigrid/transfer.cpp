@@ -98,7 +98,7 @@ void prolong_add(const Prolongation& P, const double* xc, double* xf) {
 #pragma omp parallel for schedule(static)
   for (int64_t f = 0; f < M.rows; ++f)
     for (int64_t k = M.start[f]; k < M.start[f + 1]; ++k)
-      add_block_times(&M.val[9 * k], xc + 3 * int64_t(M.col[k]), 1.0, xf + 3 * f);
+      add_stored_block_times(&M.val[9 * k], xc + 3 * int64_t(M.col[k]), xf + 3 * f);
 }
 
 void restrict_to(const Prolongation& P, const double* rf, double* bc) {
