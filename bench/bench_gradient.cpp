@@ -260,12 +260,17 @@ void BM_CgIteration(benchmark::State& state) {
   cs.tolerance = 0;  // never converged: exactly `per` iterations unless stalled
   cs.free_particles = bed.loop->free_particles();
   Timers tm;
-  int iterations = 0;
+  int iterations = 0, evaluations = 0;
+  const uint64_t builds0 = bed.loop->evaluator().self_contact().builds();
   for (auto _ : state) {
     const CgResult r = bed.loop->minimizer().minimize(bed.loop->evaluator(), bed.cloth.z.data(), cs, tm);
     iterations += r.iterations;
+    evaluations += r.evaluations;
   }
   state.counters["iterations"] = iterations;
+  state.counters["evaluations"] = evaluations;
+  // The self-contact pair list's builds over the iterations.
+  state.counters["pair_builds"] = double(bed.loop->evaluator().self_contact().builds() - builds0);
   state.counters["s_per_iteration"] =
       benchmark::Counter(iterations, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }

@@ -188,6 +188,9 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
   listed_ = total;
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
+    // Most particles have no partner (only folds bring the sheet within
+    // reach of itself): the count said so, no second search for them.
+    if (first_[k + 1] == first_[k]) continue;
     int32_t* out = partners_.data() + first_[k];
     int32_t m = 0;
     candidates(c, particles, k, [&](int32_t h) { out[m++] = h; });
