@@ -33,12 +33,15 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
   talk_ = rank_ == 0 && !opt_.quiet;
   {
     ScopedPhase ph(tm_, kSetup);
-    set_up_mesh();
+    if (ranks_ > 1 && !opt_.restart) {
+      set_up_in_slots();
+    } else {
+      set_up_mesh(nullptr);
+      tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
+      dec_ = decompose(cloth, tiling, comm_, mesh_ghost_widths());  // refuses more ranks than tiles
+      hold_own_particles(cloth, tiling, dec_);
+    }
     set_up_model();
-    tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
-    // refuses more ranks than tiles
-    dec_ = decompose(cloth, tiling, comm_, ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0));
-    hold_own_particles(cloth, tiling, dec_);
   }
   make_output_dir();
   rebuild_lists();
@@ -88,9 +91,28 @@ const char* Simulation::stage_preconditioner_name() const {
   return scene.solver.method == SolverMethod::Newton ? to_string(loop->preconditioner()) : "none";
 }
 
-// The cloth, new or the checkpoint's, on its first mesh.
-void Simulation::set_up_mesh() {
-  cloth = make_cloth(scene, fabric);
+GhostWidths Simulation::mesh_ghost_widths() const {
+  return ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0);
+}
+
+// A new run on several ranks: no rank makes the whole cloth. Each makes its
+// even share of the tiles, on the first mesh, to count their work for the
+// partition, then only its own tiles' and ghosts' particles: the same
+// values as the whole cloth's, held in slots from the start.
+void Simulation::set_up_in_slots() {
+  tiling = Tiling(scene.cloth.particles[0], scene.cloth.particles[1], scene.cloth.tile);
+  dec_ = decompose_in_slots(cloth, tiling, comm_, [this](const std::vector<int64_t>& held) {
+    amrc.reset();
+    cloth = Cloth();  // before the next is made: the set-up's peak is one share's cloth
+    set_up_mesh(&held);
+    return mesh_ghost_widths();
+  });
+}
+
+// The cloth, new or the checkpoint's, on its first mesh; `held`: a new
+// cloth's particles made in slots (make_cloth), null: every particle.
+void Simulation::set_up_mesh(const std::vector<int64_t>* held) {
+  cloth = make_cloth(scene, fabric, held);
   const CheckpointState* ck = opt_.restart;
   if (ck) {
     restore_state(*ck, cloth);

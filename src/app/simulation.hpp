@@ -116,7 +116,9 @@ class Simulation {
   bool multigrid_allowed() const;
   SolverSpec mesh_solver() const;
   const char* stage_preconditioner_name() const;
-  void set_up_mesh();
+  void set_up_mesh(const std::vector<int64_t>* held);
+  void set_up_in_slots();
+  GhostWidths mesh_ghost_widths() const;
   void set_up_tree(int start_level);
   void set_up_model();
   void stage_physics();

@@ -10,12 +10,14 @@ GhostWidths ghost_widths(bool amrc, int max_level) {
   return {4 * reach, 2 * reach};
 }
 
-Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw) {
+Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw,
+                        const std::vector<int>* counted) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &ranks);
   Decomposition d;
-  d.partition = partition_tiles(tiling, tile_work(cloth, tiling), comm);
+  const std::vector<int64_t> work = counted ? tile_work(cloth, tiling, *counted, comm) : tile_work(cloth, tiling);
+  d.partition = partition_tiles(tiling, work, comm);
   d.owned = d.partition.tiles_of(rank);
   if (ranks == 1) {
     d.reducer = std::make_unique<LocalReducer>();
@@ -26,6 +28,29 @@ Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm,
   d.mpi_reducer = mpi.get();
   d.reducer = std::move(mpi);
   return d;
+}
+
+Decomposition decompose_in_slots(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm,
+                                 const std::function<GhostWidths(const std::vector<int64_t>& held)>& make) {
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &ranks);
+  const std::vector<int> share = even_share(tiling, rank, ranks);
+  const GhostWidths gw = make(with_tiles({}, tiling, share));
+  Decomposition d = decompose(cloth, tiling, comm, gw, &share);  // refuses more ranks than tiles
+  make(own_particles(tiling, d));
+  return d;
+}
+
+std::vector<int> even_share(const Tiling& tiling, int rank, int ranks) {
+  const int64_t count = tiling.count();
+  std::vector<int> tiles;
+  for (int64_t t = count * rank / ranks; t < count * (rank + 1) / ranks; ++t) tiles.push_back(int(t));
+  return tiles;
+}
+
+std::vector<int64_t> own_particles(const Tiling& tiling, const Decomposition& d) {
+  return with_tiles(d.halo ? d.halo->ghost_ids() : std::vector<int64_t>{}, tiling, d.owned);
 }
 
 void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d) {

@@ -4,6 +4,7 @@
 // tile, no ghosts, a local reducer.
 #include <mpi.h>
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -52,7 +53,25 @@ GhostWidths ghost_widths(bool amrc, int max_level);
 // holds the grid's.
 void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d);
 
-// Collective. Throws InputError for more ranks than tiles.
-Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw = {});
+// Collective. Throws InputError for more ranks than tiles. The tiles' work
+// from the cloth's every tile, or (`counted`) from the tiles each rank
+// holds (a cloth made in slots: even_share), summed over the ranks.
+Decomposition decompose(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm, GhostWidths gw = {},
+                        const std::vector<int>* counted = nullptr);
+
+// Collective: a new run's decomposition without any rank making the whole
+// cloth. `make(held)` makes `cloth` anew (its first mesh), holding the
+// particles `held` only (make_cloth's slots), and returns the mesh's ghost
+// widths: first for the rank's even share of the tiles, whose work the
+// partition counts, then for its own tiles' and ghosts' particles.
+Decomposition decompose_in_slots(const Cloth& cloth, const Tiling& tiling, MPI_Comm comm,
+                                 const std::function<GhostWidths(const std::vector<int64_t>& held)>& make);
+
+// Before the partition: rank `rank`'s even share of the tiles (a run of
+// consecutive ids), which it makes the cloth of to count their work.
+std::vector<int> even_share(const Tiling& tiling, int rank, int ranks);
+// The particles a rank holds: its tiles' and its ghosts', ascending (one
+// rank: every particle).
+std::vector<int64_t> own_particles(const Tiling& tiling, const Decomposition& d);
 
 }  // namespace drape

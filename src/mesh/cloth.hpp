@@ -169,6 +169,12 @@ inline int64_t slot_in(const int32_t* slot, int64_t p) { return slot ? int64_t(s
 // (ascending grid ids) only, in that order: values of particles held before
 // carried over, the others 0 (-1 for the corners, switches off: rebuild_topology then).
 void hold_particles(Cloth& c, const std::vector<int64_t>& held);
+// The slot map of a cloth made in slots (make_cloth): the particles `held`
+// (ascending grid ids) at slots 0, 1, ...; returns their count. The arrays
+// are the caller's to size.
+int64_t hold_slots(Cloth& c, const std::vector<int64_t>& held);
+// The particles of `held` and of the tiles `tiles` of `tl`, ascending, once each.
+std::vector<int64_t> with_tiles(std::vector<int64_t> held, const Tiling& tl, const std::vector<int>& tiles);
 // The particles c holds x1, x2 and forces for, ascending.
 std::vector<int64_t> held_particles(const Cloth& c);
 // hold_particles for `held` (any order, repeats allowed) and every particle

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "mesh/cloth.hpp"
 
@@ -64,9 +65,23 @@ void hold_switches(const Cloth& c, std::vector<uint8_t>& on, int per, const std:
 }
 }  // namespace
 
-void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
+namespace {
+void check_slots(const std::vector<int64_t>& held) {
   if (held.size() > size_t(std::numeric_limits<int32_t>::max() / 3))
     throw std::length_error("hold_particles: more particles than 32-bit slots reach");
+}
+}  // namespace
+
+int64_t hold_slots(Cloth& c, const std::vector<int64_t>& held) {
+  check_slots(held);
+  c.slot_of.assign(size_t(c.grid.n()), -1);
+  for (size_t s = 0; s < held.size(); ++s) c.slot_of[size_t(held[s])] = int32_t(s);
+  ++c.held_version;
+  return int64_t(held.size());
+}
+
+void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
+  check_slots(held);
   std::vector<int32_t> slot(size_t(c.grid.n()), -1);
   std::vector<double> x1(3 * held.size(), 0.0), x2(3 * held.size(), 0.0), mass(held.size(), 0.0);
   for (size_t s = 0; s < held.size(); ++s) {
@@ -102,15 +117,19 @@ void hold_particles(Cloth& c, const std::vector<int64_t>& held) {
 
 namespace drape {
 
-void hold_with_tiles(Cloth& c, std::vector<int64_t> held, const Tiling& tl, const std::vector<int>& tiles) {
+std::vector<int64_t> with_tiles(std::vector<int64_t> held, const Tiling& tl, const std::vector<int>& tiles) {
   for (int t : tiles) {
     const TileRange r = tl.range(t);
     for (int i = r.i0; i < r.i1; ++i)
-      for (int j = r.j0; j < r.j1; ++j) held.push_back(c.grid.id(i, j));
+      for (int j = r.j0; j < r.j1; ++j) held.push_back(int64_t(i) * tl.nj + j);
   }
   std::sort(held.begin(), held.end());
   held.erase(std::unique(held.begin(), held.end()), held.end());
-  hold_particles(c, held);
+  return held;
+}
+
+void hold_with_tiles(Cloth& c, std::vector<int64_t> held, const Tiling& tl, const std::vector<int>& tiles) {
+  hold_particles(c, with_tiles(std::move(held), tl, tiles));
 }
 
 }  // namespace drape

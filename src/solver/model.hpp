@@ -45,6 +45,11 @@ void set_contact_layer(Contact& c, const Scene& scene, const Fabric& fabric, dou
 // A flat cloth at rest at the scene's height, on the finest mesh, every
 // particle active, nothing clamped. Allocates every array once.
 Cloth make_cloth(const Scene& scene, const Fabric& fabric);
+// The same cloth with the step history, forces, masses, neighbour tables,
+// cells and switches of the particles `held` (ascending grid ids) only, in
+// slots (hold_particles' layout) from the start: no array of them is ever
+// the grid's. Their values are the whole cloth's, bit for bit.
+Cloth make_cloth(const Scene& scene, const Fabric& fabric, const std::vector<int64_t>* held);
 // The cloth's mass, summed by tile over the owned tiles' particles (a rank
 // holds only its tiles' and ghosts' masses): the same bits on any ranks.
 double total_mass(const Cloth& c, const Tiling& tl, const std::vector<int>& owned, const Reducer& red);

@@ -106,7 +106,9 @@ void cut_to_disc(Cloth& c, const ClothSpec& spec) {
 }
 }  // namespace
 
-Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
+Cloth make_cloth(const Scene& scene, const Fabric& fabric) { return make_cloth(scene, fabric, nullptr); }
+
+Cloth make_cloth(const Scene& scene, const Fabric& fabric, const std::vector<int64_t>* held) {
   Cloth c;
   Grid& g = c.grid;
   g.ni = scene.cloth.particles[0];
@@ -114,16 +116,18 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
   g.hi = scene.cloth.size[0] / (g.ni - 1);
   g.hj = scene.cloth.size[1] / (g.nj - 1);
   const int64_t n = g.n();
-  c.layout.n = c.layout.m = n;
+  c.layout.n = n;
+  c.layout.m = held ? hold_slots(c, *held) : n;
+  const size_t m = size_t(c.layout.m);
   c.z.assign(c.layout.size(), 0.0);
-  c.x1.assign(3 * n, 0.0);
-  c.x2.assign(3 * n, 0.0);
-  c.mass.assign(n, 0.0);  // held: every particle, at its grid id, until hold_particles
+  c.x1.assign(3 * m, 0.0);
+  c.x2.assign(3 * m, 0.0);
+  c.mass.assign(m, 0.0);  // every particle, at its grid id, until hold_particles (held: in slots)
   c.flags.assign(n, kActive);
   c.level.assign(n, 0);
   for (int k = 0; k < 3; ++k) {
-    c.cell[k].assign(n, -1);
-    c.corner_of[k].assign(n, -1);
+    c.cell[k].assign(m, -1);
+    c.corner_of[k].assign(m, -1);
   }
   const double dt = scene.solver.dt, gz = -9.80665;
   double* x = c.x();
@@ -134,14 +138,14 @@ Cloth make_cloth(const Scene& scene, const Fabric& fabric) {
       x[3 * p + 0] = scene.cloth.center[0] + i * g.hi - 0.5 * scene.cloth.size[0];
       x[3 * p + 1] = scene.cloth.center[1] + j * g.hj - 0.5 * scene.cloth.size[1];
       x[3 * p + 2] = scene.cloth.height;
-      for (int k = 0; k < 3; ++k) c.x1[3 * p + k] = c.x2[3 * p + k] = x[3 * p + k];
+      const bool fixed = i < scene.cloth.clamp;  // on the platform: held, at rest
+      if (fixed) c.flags[p] |= kFixed;
+      if (!c.holds(p)) continue;
+      double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
+      for (int k = 0; k < 3; ++k) x1[k] = x2[k] = x[3 * p + k];
       // Released from rest under gravity: x(-dt) = x(0) + g dt^2 / 2 makes the
       // three-point acceleration exact for a free fall.
-      c.x2[3 * p + 2] += 0.5 * gz * dt * dt;
-      if (i < scene.cloth.clamp) {  // on the platform: held, at rest
-        c.flags[p] |= kFixed;
-        c.x2[3 * p + 2] = c.x1[3 * p + 2];
-      }
+      if (!fixed) x2[2] += 0.5 * gz * dt * dt;
     }
   c.dt = c.dt_prev = dt;
   if (scene.cloth.shape == ClothShape::Disc) cut_to_disc(c, scene.cloth);
