@@ -188,4 +188,11 @@ inline void add_scaled_block(double w, const double* __restrict b, double* __res
 // false where it is not invertible.
 bool invert_block(const double* a, double* inv);
 
+// invert_block of a stored block: the inverse row-major (the smoothers' own blocks).
+inline bool invert_stored_block(const double* a, double* inv) {
+  double rm[9];
+  to_row_major(a, rm);
+  return invert_block(rm, inv);
+}
+
 }  // namespace drape

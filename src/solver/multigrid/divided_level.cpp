@@ -222,9 +222,7 @@ void DividedLevel::finest_smoother(const Reducer& red, const BlockMatrix& mine, 
 #pragma omp parallel for schedule(static) reduction(+ : bad)
   for (int64_t i = 0; i < own_; ++i) {
     const double* a = mine.block(i, int32_t(global_[i]));
-    double rm[9];
-    if (a) to_row_major(a, rm);
-    bad += !(a && invert_block(rm, &dinv_[9 * i]));
+    bad += !(a && invert_stored_block(a, &dinv_[9 * i]));
   }
   if (red.sum_i64(bad) > 0) throw std::runtime_error("multigrid: a particle's diagonal block is singular");
   exchange(red, dinv_.data(), 9);

@@ -16,9 +16,7 @@ void Chebyshev::setup(const BlockMatrix& A, int degree, double ratio) {
 #pragma omp parallel for schedule(static) reduction(&& : ok)
   for (int64_t i = 0; i < n; ++i) {
     const double* a = A.block(i, int32_t(i));
-    double rm[9];
-    if (a) to_row_major(a, rm);
-    ok = ok && a && invert_block(rm, &dinv_[9 * i]);
+    ok = ok && a && invert_stored_block(a, &dinv_[9 * i]);
   }
   if (!ok) throw std::runtime_error("multigrid: a particle's diagonal block is singular");
   // Power iteration on D^-1 A: from a fixed start after forget() or on a new
