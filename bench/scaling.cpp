@@ -2,7 +2,8 @@
 // CG iterations (the paper's method) on a 1000 x 1000 cloth mid-drape, for
 // each schedule at 1..N threads, all in one process so the ratios come from
 // one run. Prints a table and writes JSON (run/scaling draws the plot).
-//   scaling [--size 1000] [--iterations 100] [--threads N] [--repeat R] [--amrc 0|1] [--out scaling.json]
+//   scaling [--size 1000] [--iterations 100] [--threads N | --thread-counts 1,2,4,...] [--repeat R]
+//           [--amrc 0|1] [--out scaling.json]
 // --amrc 1: on an uneven AMRC mesh (coarse, with a finest band along a fold),
 // where the tiles' work differs and the schedules differ most.
 // With R > 1 every configuration is timed R times, interleaved (round after
@@ -73,7 +74,11 @@ int main(int argc, char** argv) {
   app.option_defaults()->always_capture_default();
   app.add_option("--size", n, "particles per side")->check(CLI::Range(9, 100000));
   app.add_option("--iterations", iterations, "CG iterations per configuration")->check(CLI::Range(1, 1000000));
+  std::vector<int> counts;  // the thread counts run; 1..max_threads by default
   app.add_option("--threads", max_threads, "up to this many threads")->check(CLI::Range(1, 1024));
+  app.add_option("--thread-counts", counts, "only these thread counts, from 1 up (e.g. 1,2,4,8,16)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1024));
   app.add_option("--repeat", repeat, "rounds, interleaved; the median is reported")->check(CLI::Range(1, 1000));
   app.add_option("--amrc", amrc, "1: on an uneven AMRC mesh");
   app.add_option("--out", out, "JSON file to write");
@@ -82,18 +87,26 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // --help: 0; a bad flag: its message and 2
   }
+  if (counts.empty())
+    for (int p = 1; p <= max_threads; ++p) counts.push_back(p);
+  if (counts[0] != 1 || !std::is_sorted(counts.begin(), counts.end())) {
+    std::fprintf(stderr, "scaling: --thread-counts must start at 1 and rise (the speed-up is against 1)\n");
+    return 2;
+  }
+  const int nc = static_cast<int>(counts.size());
   const Schedule schedules[] = {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided};
   // times[schedule][threads-1] over the rounds
-  std::vector<std::vector<std::vector<double>>> times(4, std::vector<std::vector<double>>(max_threads));
+  std::vector<std::vector<std::vector<double>>> times(4, std::vector<std::vector<double>>(nc));
   std::vector<std::vector<std::vector<double>>> grads = times, loops = times, balance = times;
   for (int r = 0; r < repeat; ++r)
     for (int si = 0; si < 4; ++si)
-      for (int p = 1; p <= max_threads; ++p) {
+      for (int c = 0; c < nc; ++c) {
+        const int p = counts[c];
         const Timing t = run_once(n, iterations, schedules[si], p, amrc);
-        times[si][p - 1].push_back(t.seconds);
-        grads[si][p - 1].push_back(t.gradient);
-        loops[si][p - 1].push_back(t.loops);
-        balance[si][p - 1].push_back(t.balance);
+        times[si][c].push_back(t.seconds);
+        grads[si][c].push_back(t.gradient);
+        loops[si][c].push_back(t.loops);
+        balance[si][c].push_back(t.balance);
         std::fprintf(stderr, "round %d/%d %s %d thread(s): %.3f s, loops %.3f s, balance %.3f\n", r + 1,
                      repeat, to_string(schedules[si]), p, t.seconds, t.loops, t.balance);
       }
@@ -107,9 +120,10 @@ int main(int argc, char** argv) {
               "seq. frac", "par. ovh [s]", "grad [s]", "loops [s]", "balance");
   for (int si = 0; si < 4; ++si) {
     const double t1 = median(times[si][0]);
-    for (int p = 1; p <= max_threads; ++p) {
-      const double t = median(times[si][p - 1]), grad = median(grads[si][p - 1]);
-      const double lw = median(loops[si][p - 1]), bal = median(balance[si][p - 1]);
+    for (int c = 0; c < nc; ++c) {
+      const int p = counts[c];
+      const double t = median(times[si][c]), grad = median(grads[si][c]);
+      const double lw = median(loops[si][c]), bal = median(balance[si][c]);
       const double sp = t1 / t;
       // Karp-Flatt: the serial fraction implied by the measured speed-up.
       const double e = p > 1 ? (1 / sp - 1.0 / p) / (1 - 1.0 / p) : 0.0;
