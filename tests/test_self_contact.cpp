@@ -194,6 +194,37 @@ TEST(SelfContact, ListIsEveryPairWithinReach) {
   }
 }
 
+// The list does not depend on the thread count, whether each thread's
+// partners fit its share of the list's room (one search a particle) or
+// outgrow it (searched again into room made for them). The first build
+// outgrows the room it was given (the pressed strip has more pairs a
+// particle than reserved); the second, after a particle moved, fits.
+TEST(SelfContact, ListIsTheSameOnAnyThreadCount) {
+  std::vector<std::vector<int64_t>> first;
+  bool once = false, twice = false;
+  for (int threads : {1, 2, 3, 8, 16}) {
+    omp_set_num_threads(threads);
+    const auto world = pressed_world(3);
+    Simulation& w = *world;
+    Evaluator& ev = w.loop->evaluator();
+    ev.evaluate(w.cloth.z.data(), nullptr);
+    const SelfContact& sc = ev.self_contact();
+    const uint64_t before = sc.searched_twice();
+    twice = twice || before > 0;
+    w.cloth.z[3 * w.lists.particles.items[0] + 2] += 2 * sc.distance();  // beyond the slack: built again
+    ev.evaluate(w.cloth.z.data(), nullptr);
+    ASSERT_EQ(sc.builds(), 2u);
+    once = once || sc.searched_twice() == before;
+    std::vector<std::vector<int64_t>> lists(w.lists.particles.items.size());
+    for (size_t k = 0; k < lists.size(); ++k) sc.for_partners(int64_t(k), [&](int64_t q) { lists[k].push_back(q); });
+    if (first.empty()) first = lists;
+    ASSERT_EQ(lists, first) << threads << " threads";
+  }
+  omp_set_num_threads(1);
+  EXPECT_TRUE(once) << "no build fitted its shares: the single search went untested";
+  EXPECT_TRUE(twice) << "no build outgrew its room: the second search went untested";
+}
+
 // The Newton term's gradient (self-contact's -J^T r included, J with the
 // normal's curvature) against central differences of the cost, position by
 // position, relative to the largest entry.

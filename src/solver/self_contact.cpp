@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <omp.h>
+
 #include "solver/fit.hpp"
 
 namespace drape {
@@ -170,13 +172,43 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
   halo.plan_contact(particles.items, xb_.data(), reach_, ghosts_, gx_);
   fit_hash(n + int64_t(ghosts_.size()), c.grid.n(), false);
   hash_particles();
-  // Each particle's count at first_[k + 1], then their running sums.
-  first_[0] = 0;
+  list_pairs(c, particles);
+  // The gather's fixed order: ascending global id.
 #pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < n; ++k) {
-    int32_t m = 0;
-    candidates(c, particles, k, [&](int32_t) { ++m; });
-    first_[k + 1] = m;
+  for (int64_t k = 0; k < n; ++k)
+    std::sort(partners_.data() + first_[k], partners_.data() + first_[k + 1],
+              [this](int32_t a, int32_t b) { return id_of_hashed(a) < id_of_hashed(b); });
+  keep_partners(halo);
+}
+
+// One search a particle: each thread lists its own run of particles' partners
+// into its own share of partners_ (the array cut evenly by thread), then the
+// runs are moved down into list order. A thread whose partners outgrow its
+// share only counts on; then the particles with partners are searched again
+// into their offsets. Either way each particle's partners are those its
+// search finds, in its order: the same list on any thread count.
+void SelfContact::list_pairs(const Cloth& c, const ActiveList& particles) {
+  const int64_t n = particles.size();
+  const int64_t room = int64_t(partners_.size());
+  bool overflow = false;
+  int64_t used = 1;  // the threads that ran the search
+  first_[0] = 0;
+#pragma omp parallel reduction(|| : overflow)
+  {
+    const int64_t t = omp_get_thread_num(), threads = omp_get_num_threads();
+    if (t == 0) used = threads;
+    const int64_t end = room * (t + 1) / threads;
+    int64_t at = room * t / threads;
+    for (int64_t k = n * t / threads; k < n * (t + 1) / threads; ++k) {
+      int32_t m = 0;
+      candidates(c, particles, k, [&](int32_t h) {
+        if (at + m < end) partners_[size_t(at + m)] = h;
+        ++m;
+      });
+      overflow = overflow || at + m > end;
+      at = std::min(at + m, end);
+      first_[k + 1] = m;
+    }
   }
   int64_t total = 0;
   for (int64_t k = 0; k < n; ++k) {
@@ -184,20 +216,28 @@ void SelfContact::build(const Cloth& c, const ActiveList& particles, const doubl
     if (total > INT32_MAX) throw std::length_error("SelfContact: more pairs than 32-bit offsets reach");
     first_[k + 1] = int32_t(total);
   }
-  if (total > int64_t(partners_.size())) partners_.resize(size_t(total + total / 2));
   listed_ = total;
+  if (!overflow) {
+    // Each thread's run lies at or after its place in list order (the runs
+    // before it fit their shares), and ends before the next run's share
+    // starts: moved down in thread order, nothing is overwritten unread.
+    for (int64_t t = 0; t < used; ++t) {
+      const int64_t from = room * t / used, k0 = n * t / used, k1 = n * (t + 1) / used;
+      std::copy(partners_.begin() + from, partners_.begin() + from + (first_[k1] - first_[k0]),
+                partners_.begin() + first_[k0]);
+    }
+    return;
+  }
+  ++searched_twice_;
+  if (total > room) partners_.resize(size_t(total + total / 2));
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < n; ++k) {
-    // Most particles have no partner (only folds bring the sheet within
-    // reach of itself): the count said so, no second search for them.
+    // Most particles have no partner: no second search for them.
     if (first_[k + 1] == first_[k]) continue;
     int32_t* out = partners_.data() + first_[k];
     int32_t m = 0;
     candidates(c, particles, k, [&](int32_t h) { out[m++] = h; });
-    // The gather's fixed order: ascending global id.
-    std::sort(out, out + m, [this](int32_t a, int32_t b) { return id_of_hashed(a) < id_of_hashed(b); });
   }
-  keep_partners(halo);
 }
 
 // Only partners are read (their positions, K's direction, the residuals):

@@ -127,6 +127,9 @@ class SelfContact {
   // Counts: builds so far (a stamp for assembled patterns), listed pairs
   // (each once per particle) of the last build.
   uint64_t builds() const { return builds_; }
+  // Builds whose partners outgrew some thread's share of the list's room
+  // and were searched again (list_pairs): the same lists, more time.
+  uint64_t searched_twice() const { return searched_twice_; }
   int64_t listed() const { return listed_; }
   // The last build's contact ghosts that are partners (other ranks'
   // particles whose values this rank reads until the next build).
@@ -142,6 +145,9 @@ class SelfContact {
   double worst_move(const ActiveList& particles, const double* x) const;
   void build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo);
   void hash_particles();
+  // Lists each particle's partners at first_ (counts and offsets) and
+  // partners_, unsorted.
+  void list_pairs(const Cloth& c, const ActiveList& particles);
   // The build's position of hashed particle h: the list's first (by list
   // position), then the contact ghosts (ascending id).
   const double* built_at(int64_t h) const {
@@ -163,7 +169,7 @@ class SelfContact {
 
   Contact contact_;
   double dist_ = 0, reach_ = 0, exclude2_ = 0;
-  uint64_t stamp_ = 0, builds_ = 0;
+  uint64_t stamp_ = 0, builds_ = 0, searched_twice_ = 0;
   int64_t buckets_ = 1;             // the last build's bucket count (a power of two)
   int64_t listed_ = 0;
   int64_t own_ = 0;                 // the list's particles at the last build
