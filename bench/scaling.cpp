@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
   }
   const int nc = static_cast<int>(counts.size());
   const Schedule schedules[] = {Schedule::ActiveLists, Schedule::Static, Schedule::Dynamic, Schedule::Guided};
-  // times[schedule][threads-1] over the rounds
+  // times[schedule][c] (thread count counts[c]) over the rounds
   std::vector<std::vector<std::vector<double>>> times(4, std::vector<std::vector<double>>(nc));
   std::vector<std::vector<std::vector<double>>> grads = times, loops = times, balance = times;
   for (int r = 0; r < repeat; ++r)
