@@ -4,7 +4,7 @@
 # schedule; the total mass is the finest mesh's; the mesh really changes;
 # a run stopped and restarted from its checkpoint (tree included) ends
 # where the uninterrupted one does, also when the first part ran on 2 ranks
-# (several ranks against one: ranks_agree.sh).
+# or the second (several ranks against one: ranks_agree.sh).
 # Usage: amrc_runs.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
@@ -42,6 +42,7 @@ done
 echo "ok same checksum for 1-3 threads x 4 schedules: $ref"
 
 "$drape" "${scene[@]}" --set solver.steps=31 --set output.checkpoint_every=31 --threads 2 --output "$work/part"
+cp -r "$work/part" "$work/part1"
 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=60 --threads 1 --quiet
 [[ $(sum "$work/part") == "$ref" ]] || { echo "FAIL: restart with AMRC: $(sum "$work/part") vs $ref"; exit 1; }
 part_mean=$(report "$work/part" 'r["particles_active"]["mean"]')
@@ -56,6 +57,12 @@ OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set solver.steps=31 -
 [[ $(sum "$work/part2") == "$ref" ]] || { echo "FAIL: 2 ranks, then 1 from the checkpoint: $(sum "$work/part2") vs $ref"; exit 1; }
 h5diff "$work/ref/drape.h5" "$work/part2/drape.h5" /frames /frames || { echo "FAIL: frames differ (2 ranks, restart)"; exit 1; }
 echo "ok 31 steps on 2 ranks, restarted on 1: the same state and frames"
+# 2 ranks go on from the 1-rank checkpoint: each reads its own tiles' and
+# ghosts' particles, the tree whole.
+"$mpiexec" -n 2 "$drape" --restart "$work/part1/checkpoint.h5" --set solver.steps=60 --threads 1 --quiet
+[[ $(sum "$work/part1") == "$ref" ]] || { echo "FAIL: 1 rank, then 2 from the checkpoint: $(sum "$work/part1") vs $ref"; exit 1; }
+h5diff "$work/ref/drape.h5" "$work/part1/drape.h5" /frames /frames || { echo "FAIL: frames differ (restart on 2 ranks)"; exit 1; }
+echo "ok 31 steps on 1 rank, restarted on 2: the same state and frames"
 
 # amrc.start_spacing with AMRC: a new run starts on leaves that wide (level 2
 # here: 9 x 9 of the 33 x 33 particles), a restart on its checkpoint's tree.

@@ -512,6 +512,38 @@ TEST(CliBad, MultigridWithAmrcOnTwoRanks) {
                               "with amrc.enabled = true runs on one rank only");
 }
 
+// A checkpoint of 3 x 3 tiles with one value of its last particle's x1
+// changed: on 2 ranks only the rank holding that particle reads it, and the
+// digest summed over the ranks refuses the file on both.
+TEST(CliBad, DamagedCheckpointOnTwoRanks) {
+  const fs::path dir = tmp_dir() / "ck-tiles";
+  const Result r = run_drape({"--set", "cloth.particles=[9,9]", "--set", "cloth.tile=3", "--set", "solver.steps=2",
+                              "--set", "output.checkpoint_every=1", "--set", "output.picture=false", "--quiet",
+                              "--output", dir.string()},
+                             "ck-tiles");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const fs::path good = dir / "checkpoint.h5";
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(good.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const hid_t ds = H5Dopen2(f, "state/x1", H5P_DEFAULT);
+  const haddr_t at = H5Dget_offset(ds);  // contiguous: the values start there
+  H5Dclose(ds);
+  H5Fclose(f);
+  ASSERT_NE(at, HADDR_UNDEF);
+  const size_t last_x = size_t(at) + (81 - 1) * 3 * sizeof(double);
+  const fs::path damaged = tmp_dir() / "tiles-damaged.h5";
+  std::string bytes = slurp(good);
+  bytes.at(last_x) ^= 0x01;  // the lowest bit of its x: still a plausible number
+  spit(damaged, bytes);
+  expect_refused_on_two_ranks("ck-tiles-damaged", "--restart " + sh(damaged.string()), "damaged");
+  // The undamaged file restarts on 2 ranks.
+  const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) + " --restart " +
+                          sh(good.string()) + " --set solver.steps=3 --quiet </dev/null >/dev/null 2>&1";
+  const int rc = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0) << "status " << rc;
+}
+
 // Keys added with checkpoints, AMRC and rebalancing: out-of-range values and a
 // combination the program cannot run are refused before anything is written.
 TEST(CliBad, CheckpointAndAmrcKeys) {

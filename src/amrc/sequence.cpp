@@ -79,19 +79,19 @@ void relax_eased_edges(const Cloth& c, Evaluator& ev, double rate, double dt) {
   }
 }
 
-void eased_rest_by_slot(Evaluator& ev, double* by_slot) {
+void eased_rest_by_slot(const Cloth& c, Evaluator& ev, double* by_slot) {
   const double* rest_of = ev.edge_rest_lengths();
   const ActiveList& edges = ev.lists().edges;
-  for (int64_t k = 0; k < edges.size(); ++k) by_slot[edges.items[k]] = rest_of[k];
+  for (int64_t k = 0; k < edges.size(); ++k) by_slot[c.pair_slot(edges.items[k])] = rest_of[k];
 }
 
-void restore_eased_edges(Evaluator& ev, const double* by_slot) {
+void restore_eased_edges(const Cloth& c, Evaluator& ev, const double* by_slot) {
   double* rest_of = ev.edge_rest_lengths();
   const ActiveList& edges = ev.lists().edges;
   const ActiveList& ring = ev.lists().ring_edges;
   for (const ActiveList* l : {&edges, &ring}) {
     const int64_t n = l->size(), base = l == &edges ? 0 : edges.size();
-    for (int64_t k = 0; k < n; ++k) rest_of[base + k] = by_slot[l->items[k]];
+    for (int64_t k = 0; k < n; ++k) rest_of[base + k] = by_slot[c.pair_slot(l->items[k])];
   }
 }
 

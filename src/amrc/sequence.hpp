@@ -63,10 +63,11 @@ double ease_stretched_edges(const Cloth& c, Evaluator& ev);
 // One step of dt: rest lengths move rate * dt (strain) back towards the material's.
 void relax_eased_edges(const Cloth& c, Evaluator& ev, double rate, double dt);
 // What a checkpoint keeps of the easing: this rank's own listed edges' rest
-// lengths by slot (by_slot: 2 per particle of the grid; other slots untouched).
-void eased_rest_by_slot(Evaluator& ev, double* by_slot);
+// lengths by slot (by_slot: 2 per particle c holds, at Cloth::pair_slot;
+// other slots untouched).
+void eased_rest_by_slot(const Cloth& c, Evaluator& ev, double* by_slot);
 // A restart's: every listed edge (the ring's too) takes its slot's rest
-// length from by_slot (a checkpoint's, the whole grid's).
-void restore_eased_edges(Evaluator& ev, const double* by_slot);
+// length from by_slot (a checkpoint's, for the particles c holds).
+void restore_eased_edges(const Cloth& c, Evaluator& ev, const double* by_slot);
 
 }  // namespace drape

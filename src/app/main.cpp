@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
     const std::string toml = drape::scene_to_toml(scene);
     if (dry_run) {
       if (root && resume)
-        std::cout << "# restart from " << restart << " at step " << resume->cloth.step << "\n";
+        std::cout << "# restart from " << restart << " at step " << resume->step << "\n";
       if (root) std::cout << toml;
       MPI_Finalize();
       return 0;

@@ -33,14 +33,15 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
   talk_ = rank_ == 0 && !opt_.quiet;
   {
     ScopedPhase ph(tm_, kSetup);
-    if (ranks_ > 1 && !opt_.restart) {
+    if (ranks_ > 1) {
       set_up_in_slots();
     } else {
+      tiling = Tiling(scene.cloth.particles[0], scene.cloth.particles[1], scene.cloth.tile);
       set_up_mesh(nullptr);
-      tiling = Tiling(cloth.grid.ni, cloth.grid.nj, scene.cloth.tile);
       dec_ = decompose(cloth, tiling, comm_, mesh_ghost_widths());  // refuses more ranks than tiles
       hold_own_particles(cloth, tiling, dec_);
     }
+    if (opt_.restart) check_restart_digest();  // before anything is written
     set_up_model();
   }
   make_output_dir();
@@ -53,7 +54,7 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
     sum_.stages.push_back(
         {cloth.step, cloth.time, sequence_level_, sum_.active_final, stage_preconditioner_name()});
   if (opt_.restart) loop->minimizer().set_first_step(opt_.restart->counters.cg_first_step);
-  if (opt_.restart) restore_easing(opt_.restart->eased);
+  if (opt_.restart) restore_easing(opt_.restart->ease_until);
   own_blocks();
 }
 
@@ -95,10 +96,11 @@ GhostWidths Simulation::mesh_ghost_widths() const {
   return ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0);
 }
 
-// A new run on several ranks: no rank makes the whole cloth. Each makes its
-// even share of the tiles, on the first mesh, to count their work for the
-// partition, then only its own tiles' and ghosts' particles: the same
-// values as the whole cloth's, held in slots from the start.
+// A run on several ranks, new or restarted: no rank makes or reads the
+// whole cloth. Each makes its even share of the tiles, on the first mesh
+// (a restart: the checkpoint's), to count their work for the partition,
+// then only its own tiles' and ghosts' particles: the same values as the
+// whole cloth's, held in slots from the start.
 void Simulation::set_up_in_slots() {
   tiling = Tiling(scene.cloth.particles[0], scene.cloth.particles[1], scene.cloth.tile);
   dec_ = decompose_in_slots(cloth, tiling, comm_, [this](const std::vector<int64_t>& held) {
@@ -115,7 +117,7 @@ void Simulation::set_up_mesh(const std::vector<int64_t>* held) {
   cloth = make_cloth(scene, fabric, held);
   const CheckpointState* ck = opt_.restart;
   if (ck) {
-    restore_state(*ck, cloth);
+    read_restart_particles(*ck);
     rebuild_topology(cloth, scene.cloth.shear);
     rebuild_geometry(cloth, fabric.density);
     sum_.counters = ck->counters;
@@ -129,6 +131,29 @@ void Simulation::set_up_mesh(const std::vector<int64_t>* held) {
   // A restart goes on on its checkpoint's mesh: the finest one where it holds no tree.
   if (!scene.amrc.enabled && !(ck && ck->amrc_levels.empty())) sequence_level_ = start_level;
   if (scene.amrc.enabled || sequence_level_ > 0) set_up_tree(start_level);  // from the finest mesh (paper), or the checkpoint's
+}
+
+// The checkpoint's values of the particles this rank holds, and the digest's
+// sums of its tiles. A damaged file may fail on some ranks only (their
+// rows): all ranks learn the first failure and refuse together.
+void Simulation::read_restart_particles(const CheckpointState& ck) {
+  std::string error;
+  try {
+    read_checkpoint_particles(ck, cloth, restart_eased_);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  error = first_error(comm_, error);
+  if (!error.empty()) throw InputError(error);
+  restart_tile_sums_ = checkpoint_tile_sums(cloth, tiling, restart_eased_);
+}
+
+// Every rank sums its own tiles' particles: together, every particle once.
+void Simulation::check_restart_digest() {
+  uint64_t mine = 0;
+  for (int t : dec_.owned) mine += restart_tile_sums_[size_t(t)];
+  check_checkpoint_digest(*opt_.restart, sum_over_ranks(comm_, mine));
+  restart_tile_sums_ = {};
 }
 
 void Simulation::set_up_tree(int start_level) {
@@ -191,15 +216,16 @@ void Simulation::rebuild_lists() {
   if (amrc) hanging_links(amrc->tree(), lists.hanging);
 }
 
-// Each rank writes its own tiles' blocks of every collective file.
 // A checkpoint inside grid sequencing's easing window goes on with the
 // rest lengths eased so far, as the uninterrupted run does.
-void Simulation::restore_easing(const EasedEdges& eased) {
-  if (eased.rest.empty()) return;
-  ease_until_ = eased.until;
-  restore_eased_edges(loop->evaluator(), eased.rest.data());
+void Simulation::restore_easing(double until) {
+  if (restart_eased_.empty()) return;
+  ease_until_ = until;
+  restore_eased_edges(cloth, loop->evaluator(), restart_eased_.data());
+  restart_eased_ = {};
 }
 
+// Each rank writes its own tiles' blocks of every collective file.
 void Simulation::own_blocks() {
   blocks_.clear();
   for (int t : dec_.owned) {

@@ -125,7 +125,9 @@ class Simulation {
   void rebuild_lists();
   void mesh_changed(bool new_stage);
   void own_blocks();
-  void restore_easing(const EasedEdges& eased);
+  void restore_easing(double until);
+  void read_restart_particles(const CheckpointState& ck);
+  void check_restart_digest();
   EasedEdges easing();
   void make_output_dir() const;
   void open_output();
@@ -162,6 +164,9 @@ class Simulation {
   bool sequencing_ = false;
   double finest_force_scale_ = 0;
   double ease_until_ = 0;  // stretched edges eased by the last split relax until this time
+  // A restart's, until set up: its eased edges (pair slots) and digest sums per tile.
+  std::vector<double> restart_eased_;
+  std::vector<uint64_t> restart_tile_sums_;
   clock::time_point stage_start_;
   StageTime stage_before_;  // the previous stage's wall seconds and preconditioner
   int last_frame_ = -1;       // the step of the last frame written (-1: none yet)

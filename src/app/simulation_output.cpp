@@ -146,8 +146,8 @@ EasedEdges Simulation::easing() {
   EasedEdges e;
   if (!(cloth.time < ease_until_)) return e;
   e.until = ease_until_;
-  e.rest.assign(size_t(2 * cloth.grid.n()), 0.0);
-  eased_rest_by_slot(loop->evaluator(), e.rest.data());
+  e.rest.assign(size_t(2 * cloth.layout.m), 0.0);
+  eased_rest_by_slot(cloth, loop->evaluator(), e.rest.data());
   return e;
 }
 

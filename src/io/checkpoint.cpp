@@ -37,34 +37,36 @@ const int64_t kOldestReadable = 5;
 
 // ------------------------------------------------------------ the digest --
 
-// Sum over the given blocks of a hash of everything a particle carries
-// (its edges' eased rest lengths too, when given).
+// A hash of everything particle p carries (its edges' eased rest lengths
+// too, when given: 2 a held particle, at pair slots).
+uint64_t particle_hash(const Cloth& c, int64_t p, const std::vector<double>& eased) {
+  Hasher h(0x452821e638d01377ULL ^ uint64_t(p));
+  const double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
+  for (int k = 0; k < 3; ++k) {
+    h.add(c.z[3 * p + k]);
+    h.add(x1[k]);
+    h.add(x2[k]);
+  }
+  for (int k = 0; k < 2; ++k) {
+    h.add(c.force(0, 2 * p + k));
+    h.add(c.force(1, 2 * p + k));
+  }
+  h.add(c.force(2, p));
+  h.add(uint64_t(c.flags[p]));
+  h.add(uint64_t(c.level[p]));
+  if (!eased.empty()) {
+    h.add(eased[size_t(c.pair_slot(2 * p))]);
+    h.add(eased[size_t(c.pair_slot(2 * p + 1))]);
+  }
+  return h.value();
+}
+
+// Sum over the given blocks of their particles' hashes.
 uint64_t state_sum(const Cloth& c, const std::vector<Block>& blocks, const std::vector<double>& eased) {
   uint64_t sum = 0;
   for (const Block& b : blocks)
     for (int i = b.i0; i < b.i1; ++i)
-      for (int j = b.j0; j < b.j1; ++j) {
-        const int64_t p = c.grid.id(i, j);
-        Hasher h(0x452821e638d01377ULL ^ uint64_t(p));
-        const double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
-        for (int k = 0; k < 3; ++k) {
-          h.add(c.z[3 * p + k]);
-          h.add(x1[k]);
-          h.add(x2[k]);
-        }
-        for (int k = 0; k < 2; ++k) {
-          h.add(c.force(0, 2 * p + k));
-          h.add(c.force(1, 2 * p + k));
-        }
-        h.add(c.force(2, p));
-        h.add(uint64_t(c.flags[p]));
-        h.add(uint64_t(c.level[p]));
-        if (!eased.empty()) {
-          h.add(eased[size_t(2 * p)]);
-          h.add(eased[size_t(2 * p + 1)]);
-        }
-        sum += h.value();
-      }
+      for (int j = b.j0; j < b.j1; ++j) sum += particle_hash(c, c.grid.id(i, j), eased);
   return sum;
 }
 
@@ -118,22 +120,34 @@ RunCounters counters_from(const std::vector<double>& v) {
 }
 
 // Everything that is not per particle.
-uint64_t meta_hash(const Cloth& c, const std::string& toml, Fabric fabric, const RunCounters& r,
-                   const std::vector<uint8_t>& levels, const EasedEdges& eased) {
+struct Meta {
+  const Grid& grid;
+  int step;
+  double time, dt, dt_prev;
+  const std::string& toml;
+  const Fabric& fabric;
+  const RunCounters& counters;
+  const std::vector<uint8_t>& levels;
+  bool eased;
+  double ease_until;
+};
+
+uint64_t meta_hash(const Meta& m) {
   Hasher h(0xa4093822299f31d0ULL);
-  h.add(uint64_t(c.grid.ni));
-  h.add(uint64_t(c.grid.nj));
-  h.add(uint64_t(c.step));
-  for (double v : {c.time, c.dt, c.dt_prev}) h.add(v);
-  h.add(toml);
-  h.add(fabric.name);
-  h.add(fabric.source);
-  for (double v : fabric_numbers(fabric)) h.add(v);
-  for (auto& [name, curve] : curves_of(fabric)) add_curve(h, *curve);
-  for (double v : counter_numbers(r)) h.add(v);
-  h.add(uint64_t(levels.size()));
-  for (uint8_t l : levels) h.add(uint64_t(l));
-  if (!eased.rest.empty()) h.add(eased.until);
+  h.add(uint64_t(m.grid.ni));
+  h.add(uint64_t(m.grid.nj));
+  h.add(uint64_t(m.step));
+  for (double v : {m.time, m.dt, m.dt_prev}) h.add(v);
+  h.add(m.toml);
+  h.add(m.fabric.name);
+  h.add(m.fabric.source);
+  for (double v : fabric_numbers(m.fabric)) h.add(v);
+  Fabric copy = m.fabric;
+  for (auto& [name, curve] : curves_of(copy)) add_curve(h, *curve);
+  for (double v : counter_numbers(m.counters)) h.add(v);
+  h.add(uint64_t(m.levels.size()));
+  for (uint8_t l : m.levels) h.add(uint64_t(l));
+  if (m.eased) h.add(m.ease_until);
   return h.value();
 }
 
@@ -203,7 +217,6 @@ void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, co
   Handle g = w.group(root, "state");
   const int ni = c.grid.ni, nj = c.grid.nj;
   const Selection s1 = select_blocks(owned, ni, nj, 1);
-  const Selection s2 = select_blocks(owned, ni, nj, 2);
   const Selection s3 = select_blocks(owned, ni, nj, 3);
   const hid_t f64 = H5T_IEEE_F64LE, d = H5T_NATIVE_DOUBLE, u8 = H5T_STD_U8LE, c8 = H5T_NATIVE_UINT8;
   w.dataset(g.get(), "positions", f64, d, c.x(), s3);
@@ -214,7 +227,7 @@ void write_state(hid_t root, const Cloth& c, const std::vector<Block>& owned, co
   write_held(g.get(), "x2", c, c.x2.data(), 3, owned, w);
   w.dataset(g.get(), "flags", u8, c8, c.flags.data(), s1);
   w.dataset(g.get(), "level", u8, c8, c.level.data(), s1);
-  if (!eased.empty()) w.dataset(g.get(), "eased_rest", f64, d, eased.data(), s2);
+  if (!eased.empty()) write_held(g.get(), "eased_rest", c, eased.data(), 2, owned, w);
 }
 
 // The bytes a checkpoint's datasets and attributes hold, HDF5's metadata aside.
@@ -256,7 +269,9 @@ void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
   const int rank = rank_of(comm);
   const std::string path = dir + "/checkpoint.h5", tmp = path + ".tmp";
   const uint64_t total = sum_over_ranks(comm, state_sum(cloth, owned, eased.rest));
-  const uint64_t digest = Hasher::mix(total ^ meta_hash(cloth, scene_toml, fabric, counters, amrc_levels, eased));
+  const Meta meta{cloth.grid, cloth.step,  cloth.time,  cloth.dt,          cloth.dt_prev,    scene_toml,
+                  fabric,     counters,    amrc_levels, !eased.rest.empty(), eased.until};
+  const uint64_t digest = Hasher::mix(total ^ meta_hash(meta));
 
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   try {
@@ -379,36 +394,16 @@ Fabric read_fabric(hid_t root) {
   return f;
 }
 
-void read_state(hid_t root, Cloth& c) {
+// The per-particle datasets and their values a particle.
+const std::pair<const char*, int> kParticleData[] = {{"positions", 3}, {"tension", 2}, {"moment", 2}, {"shear", 1},
+                                                     {"x1", 3},        {"x2", 3},      {"flags", 1},  {"level", 1}};
+
+void check_particle_data(hid_t root, bool eased) {
   if (H5Lexists(root, "state", H5P_DEFAULT) <= 0) fail("group 'state' is missing");
   Handle g(check(H5Gopen2(root, "state", H5P_DEFAULT), "opening group 'state'"), H5Gclose);
-  const int64_t n = c.grid.n();
-  c.layout.n = c.layout.m = n;
-  c.z.assign(c.layout.size(), 0.0);
-  c.x1.assign(3 * n, 0.0);
-  c.x2.assign(3 * n, 0.0);
-  c.flags.assign(n, 0);
-  c.level.assign(n, 0);
-  const hid_t d = H5T_NATIVE_DOUBLE, u8 = H5T_NATIVE_UINT8;
-  read_dataset(g.get(), "positions", d, c.x(), 3 * n);
-  read_dataset(g.get(), "tension", d, c.tension(), 2 * n);
-  read_dataset(g.get(), "moment", d, c.moment(), 2 * n);
-  read_dataset(g.get(), "shear", d, c.shear(), n);
-  read_dataset(g.get(), "x1", d, c.x1.data(), 3 * n);
-  read_dataset(g.get(), "x2", d, c.x2.data(), 3 * n);
-  read_dataset(g.get(), "flags", u8, c.flags.data(), n);
-  read_dataset(g.get(), "level", u8, c.level.data(), n);
-}
-
-// Grid sequencing's eased edges, where the run was inside their window.
-EasedEdges read_eased(hid_t root, int64_t n) {
-  EasedEdges e;
-  Handle g(check(H5Gopen2(root, "state", H5P_DEFAULT), "opening group 'state'"), H5Gclose);
-  if (H5Lexists(g.get(), "eased_rest", H5P_DEFAULT) <= 0) return e;
-  e.until = get_double(root, "ease_until");
-  e.rest.assign(size_t(2 * n), 0.0);
-  read_dataset(g.get(), "eased_rest", H5T_NATIVE_DOUBLE, e.rest.data(), e.rest.size());
-  return e;
+  for (const auto& [name, per] : kParticleData)
+    if (H5Lexists(g.get(), name, H5P_DEFAULT) <= 0) fail("dataset '" + std::string(name) + "' is missing");
+  if (eased && H5Lexists(g.get(), "eased_rest", H5P_DEFAULT) <= 0) fail("dataset 'eased_rest' is missing");
 }
 
 CheckpointState read_verified(const std::string& path) {
@@ -429,31 +424,70 @@ CheckpointState read_verified(const std::string& path) {
   if (ni < 3 || nj < 3 || ni * nj > INT32_MAX || step < 0)
     throw InputError("holds an impossible grid " + std::to_string(ni) + " x " + std::to_string(nj) +
                      " or step " + std::to_string(step));
-  Cloth& c = ck.cloth;
-  c.grid.ni = int(ni);
-  c.grid.nj = int(nj);
-  c.step = int(step);
-  c.time = get_double(root, "time");
-  c.dt = get_double(root, "dt");
-  c.dt_prev = get_double(root, "dt_prev");
-  if (!(c.dt > 0) || !(c.dt_prev > 0) || !std::isfinite(c.time))
-    throw InputError("holds an impossible time " + std::to_string(c.time) + " or time step");
+  ck.grid.ni = int(ni);
+  ck.grid.nj = int(nj);
+  ck.step = int(step);
+  ck.time = get_double(root, "time");
+  ck.dt = get_double(root, "dt");
+  ck.dt_prev = get_double(root, "dt_prev");
+  if (!(ck.dt > 0) || !(ck.dt_prev > 0) || !std::isfinite(ck.time))
+    throw InputError("holds an impossible time " + std::to_string(ck.time) + " or time step");
   ck.scene_toml = get_string(root, "scene_toml");
   std::vector<double> cn(counter_numbers(RunCounters{}).size());
   get_numbers(root, "counters", H5T_NATIVE_DOUBLE, cn.data(), cn.size());
   ck.counters = counters_from(cn);
-  read_state(root, c);
-  ck.eased = read_eased(root, c.grid.n());
+  ck.eased = has_attribute(root, "ease_until");
+  if (ck.eased) ck.ease_until = get_double(root, "ease_until");
+  check_particle_data(root, ck.eased);
   ck.fabric = read_fabric(root);
   if (H5Lexists(root, "amrc_levels", H5P_DEFAULT) > 0) {
     ck.amrc_levels.resize(size_t(ni - 1) * (nj - 1));
     read_dataset(root, "amrc_levels", H5T_NATIVE_UINT8, ck.amrc_levels.data(), ck.amrc_levels.size());
   }
-  const uint64_t digest = Hasher::mix(state_sum(c, {Block{0, c.grid.ni, 0, c.grid.nj}}, ck.eased.rest) ^
-                                      meta_hash(c, ck.scene_toml, ck.fabric, ck.counters, ck.amrc_levels, ck.eased));
-  if (hex(digest) != get_string(root, "digest"))
-    throw InputError("its contents do not match its digest (the file is damaged)");
+  ck.digest = get_string(root, "digest");
   return ck;
+}
+
+// Reads `per` values a held particle of dataset `name` (ids: the held
+// particles, ascending; null: all) and hands each particle's to `put`.
+template <class T, class Put>
+void read_held(hid_t g, const char* name, hid_t type, const Grid& grid, int per, const std::vector<int64_t>* ids,
+               Put put) {
+  const int64_t count = ids ? int64_t(ids->size()) : grid.n();
+  std::vector<T> buf(size_t(count * per));
+  read_particles(g, name, type, grid.ni, grid.nj, per, ids, buf.data());
+  for (int64_t k = 0; k < count; ++k) put(ids ? (*ids)[size_t(k)] : k, &buf[size_t(k * per)]);
+}
+
+void read_particles_of(const CheckpointState& ck, Cloth& c, std::vector<double>& eased) {
+  Handle file(check(H5Fopen(ck.path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
+                    "cannot be opened as HDF5 (truncated or damaged?)"),
+              H5Fclose);
+  Handle g(check(H5Gopen2(file.get(), "state", H5P_DEFAULT), "opening group 'state'"), H5Gclose);
+  const std::vector<int64_t> held = c.slots() ? held_particles(c) : std::vector<int64_t>{};
+  const std::vector<int64_t>* ids = c.slots() ? &held : nullptr;
+  const hid_t d = H5T_NATIVE_DOUBLE, u8 = H5T_NATIVE_UINT8;
+  const hid_t gr = g.get();
+  read_held<double>(gr, "positions", d, c.grid, 3, ids, [&](int64_t p, const double* v) {
+    std::copy(v, v + 3, c.x() + 3 * p);
+  });
+  for (int b = 0; b < 2; ++b)
+    read_held<double>(gr, b == 0 ? "tension" : "moment", d, c.grid, 2, ids, [&](int64_t p, const double* v) {
+      c.force(b, 2 * p) = v[0];
+      c.force(b, 2 * p + 1) = v[1];
+    });
+  read_held<double>(gr, "shear", d, c.grid, 1, ids, [&](int64_t p, const double* v) { c.force(2, p) = v[0]; });
+  read_held<double>(gr, "x1", d, c.grid, 3, ids, [&](int64_t p, const double* v) { std::copy(v, v + 3, c.x1_at(p)); });
+  read_held<double>(gr, "x2", d, c.grid, 3, ids, [&](int64_t p, const double* v) { std::copy(v, v + 3, c.x2_at(p)); });
+  read_held<uint8_t>(gr, "flags", u8, c.grid, 1, ids, [&](int64_t p, const uint8_t* v) { c.flags[p] = v[0]; });
+  read_held<uint8_t>(gr, "level", u8, c.grid, 1, ids, [&](int64_t p, const uint8_t* v) { c.level[p] = v[0]; });
+  eased.clear();
+  if (!ck.eased) return;
+  eased.assign(size_t(2 * c.layout.m), 0.0);
+  read_held<double>(gr, "eased_rest", d, c.grid, 2, ids, [&](int64_t p, const double* v) {
+    eased[size_t(c.pair_slot(2 * p))] = v[0];
+    eased[size_t(c.pair_slot(2 * p + 1))] = v[1];
+  });
 }
 
 }  // namespace
@@ -477,22 +511,39 @@ CheckpointState read_checkpoint(const std::string& path) {
   }
 }
 
-void restore_state(const CheckpointState& ck, Cloth& cloth) {
-  const Cloth& s = ck.cloth;
-  if (s.grid.ni != cloth.grid.ni || s.grid.nj != cloth.grid.nj)
+void read_checkpoint_particles(const CheckpointState& ck, Cloth& cloth, std::vector<double>& eased) {
+  if (ck.grid.ni != cloth.grid.ni || ck.grid.nj != cloth.grid.nj)
     throw InputError("checkpoint " + ck.path + ": its grid does not match the scene's");
-  cloth.z = s.z;
-  cloth.layout = s.layout;
-  cloth.x1 = s.x1;  // the grid's: decomposing narrows them (hold_own_particles)
-  cloth.x2 = s.x2;
-  cloth.slot_of.clear();
-  ++cloth.held_version;
-  cloth.flags = s.flags;
-  cloth.level = s.level;
-  cloth.step = s.step;
-  cloth.time = s.time;
-  cloth.dt = s.dt;
-  cloth.dt_prev = s.dt_prev;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  try {
+    read_particles_of(ck, cloth, eased);
+  } catch (const std::exception& e) {
+    throw InputError("checkpoint " + ck.path + ": " + e.what());
+  }
+  cloth.step = ck.step;
+  cloth.time = ck.time;
+  cloth.dt = ck.dt;
+  cloth.dt_prev = ck.dt_prev;
+}
+
+std::vector<uint64_t> checkpoint_tile_sums(const Cloth& cloth, const Tiling& tiling, const std::vector<double>& eased) {
+  std::vector<uint64_t> sums(size_t(tiling.count()), 0);
+  for (int t = 0; t < tiling.count(); ++t) {
+    const TileRange r = tiling.range(t);
+    for (int i = r.i0; i < r.i1; ++i)
+      for (int j = r.j0; j < r.j1; ++j) {
+        const int64_t p = cloth.grid.id(i, j);
+        if (cloth.holds(p)) sums[size_t(t)] += particle_hash(cloth, p, eased);
+      }
+  }
+  return sums;
+}
+
+void check_checkpoint_digest(const CheckpointState& ck, uint64_t particle_sum) {
+  const Meta meta{ck.grid,   ck.step,     ck.time,          ck.dt,   ck.dt_prev, ck.scene_toml,
+                  ck.fabric, ck.counters, ck.amrc_levels, ck.eased, ck.ease_until};
+  if (hex(Hasher::mix(particle_sum ^ meta_hash(meta))) != ck.digest)
+    throw InputError("checkpoint " + ck.path + ": its contents do not match its digest (the file is damaged)");
 }
 
 }  // namespace drape

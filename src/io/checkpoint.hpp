@@ -32,6 +32,7 @@
 
 #include "io/frame.hpp"
 #include "mesh/cloth.hpp"
+#include "mesh/tiles.hpp"
 #include "solver/fabric.hpp"
 
 namespace drape {
@@ -48,38 +49,56 @@ struct RunCounters {
 };
 
 // Grid sequencing's eased edges (amrc/sequence.hpp): until when they relax,
-// and each edge slot's rest length as eased so far (2 per particle, grid
-// order, 0 where none is listed; empty when none eases). A restart inside
-// the window must continue from these, not from the material's lengths.
+// and each edge slot's rest length as eased so far (2 per held particle, at
+// Cloth::pair_slot, 0 where none is listed; empty when none eases). A
+// restart inside the window must continue from these, not from the
+// material's lengths.
 struct EasedEdges {
   double until = 0;
   std::vector<double> rest;
 };
 
+// What a checkpoint holds besides its particles: enough to make the cloth
+// of its scene, which read_checkpoint_particles then fills.
 struct CheckpointState {
   std::string path;
   std::string scene_toml;
   Fabric fabric;
   RunCounters counters;
   std::vector<uint8_t> amrc_levels;  // empty without AMRC
-  EasedEdges eased;
-  // Grid, unknowns, history, flags, levels, step, time, dt, dt_prev; the
-  // rest of the cloth is rebuilt from the scene and the flags.
-  Cloth cloth;
+  Grid grid;                         // ni, nj
+  int step = 0;
+  double time = 0, dt = 0, dt_prev = 0;
+  bool eased = false;                // the run was inside grid sequencing's easing window
+  double ease_until = 0;
+  std::string digest;
 };
 
 // Collective over `comm`. `owned`: the blocks this rank writes (eased.rest,
-// when not empty, is grid-sized with at least the owned blocks' slots set).
+// when not empty, holds at least the owned particles' slots).
 void write_checkpoint(const std::string& dir, MPI_Comm comm, const Cloth& cloth,
                       const std::vector<Block>& owned, const std::string& scene_toml,
                       const Fabric& fabric, const RunCounters& counters,
                       const std::vector<uint8_t>& amrc_levels = {}, const EasedEdges& eased = {});
 
-// Reads and verifies a checkpoint on this rank alone. Throws InputError
-// naming the file and what is wrong with it.
+// Reads a checkpoint's metadata on this rank alone and checks that its
+// particle datasets are there. Throws InputError naming the file and what
+// is wrong with it.
 CheckpointState read_checkpoint(const std::string& path);
 
-// Copies a checkpoint's state into a cloth made for the same scene.
-void restore_state(const CheckpointState& ck, Cloth& cloth);
+// Reads the particles `cloth` holds (all, or its slots on several ranks:
+// hyperslabs of those rows only) into it, made for the checkpoint's scene,
+// with the step, time and time steps; `eased` gets their eased edges
+// (cleared where the checkpoint has none). Throws InputError; the file's
+// digest is checked by check_checkpoint_digest.
+void read_checkpoint_particles(const CheckpointState& ck, Cloth& cloth, std::vector<double>& eased);
+
+// The digest's sum over the particles of each tile of `tiling` as `cloth`
+// holds them (those of tiles it holds in part are partial: sum owned tiles only).
+std::vector<uint64_t> checkpoint_tile_sums(const Cloth& cloth, const Tiling& tiling, const std::vector<double>& eased);
+
+// Throws InputError where `particle_sum`, the tile sums of all tiles
+// (summed over ranks), and the metadata do not give the file's digest.
+void check_checkpoint_digest(const CheckpointState& ck, uint64_t particle_sum);
 
 }  // namespace drape

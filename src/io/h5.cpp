@@ -237,4 +237,35 @@ void read_dataset(hid_t group, const std::string& name, hid_t mem_type, void* ou
                "reading dataset '" + name + "'");
 }
 
+void read_particles(hid_t group, const std::string& name, hid_t mem_type, int ni, int nj, int comps,
+                    const std::vector<int64_t>* ids, void* out) {
+  const hsize_t all = hsize_t(ni) * hsize_t(nj) * hsize_t(comps);
+  if (!ids) return read_dataset(group, name, mem_type, out, all);
+  if (H5Lexists(group, name.c_str(), H5P_DEFAULT) <= 0) fail("dataset '" + name + "' is missing");
+  Handle ds(check(H5Dopen2(group, name.c_str(), H5P_DEFAULT), "opening dataset '" + name + "'"), H5Dclose);
+  Handle file(check(H5Dget_space(ds.get()), "reading a dataspace"), H5Sclose);
+  std::vector<hsize_t> dims(3, 1);
+  const int rank = H5Sget_simple_extent_ndims(file.get());
+  if (rank != (comps > 1 ? 3 : 2) || H5Sget_simple_extent_dims(file.get(), dims.data(), nullptr) != rank ||
+      dims[0] != hsize_t(ni) || dims[1] != hsize_t(nj) || (comps > 1 && dims[2] != hsize_t(comps)))
+    fail("dataset '" + name + "' is not an " + std::to_string(ni) + " x " + std::to_string(nj) +
+         (comps > 1 ? " x " + std::to_string(comps) : std::string()) + " array");
+  check_status(H5Sselect_none(file.get()), "selecting nothing");
+  for (size_t k = 0; k < ids->size();) {  // one run of consecutive particles of a row
+    const int64_t p = (*ids)[k];
+    const int i = int(p / nj), j = int(p % nj);
+    size_t e = k + 1;
+    while (e < ids->size() && (*ids)[e] == (*ids)[e - 1] + 1 && (*ids)[e] % nj != 0) ++e;
+    const hsize_t start[3] = {hsize_t(i), hsize_t(j), 0};
+    const hsize_t count[3] = {1, hsize_t(e - k), hsize_t(comps)};
+    check_status(H5Sselect_hyperslab(file.get(), H5S_SELECT_OR, start, nullptr, count, nullptr),
+                 "selecting the held particles of '" + name + "'");
+    k = e;
+  }
+  Handle mem = make_space({std::max<hsize_t>(1, ids->size() * hsize_t(comps))});
+  if (ids->empty()) check_status(H5Sselect_none(mem.get()), "selecting nothing");
+  check_status(H5Dread(ds.get(), mem_type, mem.get(), file.get(), H5P_DEFAULT, out),
+               "reading dataset '" + name + "'");
+}
+
 }  // namespace drape::h5

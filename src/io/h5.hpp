@@ -98,5 +98,11 @@ void write_dataset(hid_t group, const std::string& name, hid_t file_type, hid_t 
 // Reads a whole dataset of `count` elements into `out`, after checking that
 // it holds exactly that many (a foreign or damaged file fails here).
 void read_dataset(hid_t group, const std::string& name, hid_t mem_type, void* out, hsize_t count);
+// Reads the `comps` values a particle of an (NI x NJ [x C]) dataset for the
+// particles `ids` (ascending grid ids) into `out`, in that order: one
+// selection of their runs along rows, so a rank reads only what it holds.
+// Null `ids`: the whole dataset. The count is checked as read_dataset's.
+void read_particles(hid_t group, const std::string& name, hid_t mem_type, int ni, int nj, int comps,
+                    const std::vector<int64_t>* ids, void* out);
 
 }  // namespace drape::h5

@@ -3,9 +3,10 @@
 # mesh lengthens the rest lengths of the edges it left stretched, and they
 # relax back over the next steps (amrc/sequence.hpp). A run stopped a few
 # steps after the split, on 2 ranks, and continued on 1 rank x 2 threads
-# ends in the uninterrupted run's state, bit for bit: its checkpoint holds
-# the eased rest lengths (/state/eased_rest), not only the material's.
-# Usage: restart_eased_np2.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
+# or on 3 ranks ends in the uninterrupted run's state, bit for bit: its
+# checkpoint holds the eased rest lengths (/state/eased_rest), not only the
+# material's.
+# Usage: restart_eased_np3.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
@@ -42,8 +43,15 @@ python3 -c "import sys; sys.exit(not float('${eased:-0}') > 1)" ||
   fail "the split eased no edge beyond 1 % (got '$eased' %): nothing to restart inside"
 h5ls "$work/part/checkpoint.h5/state" | grep -q '^eased_rest ' ||
   fail "the checkpoint at step $cut (split at $split) holds no eased rest lengths"
+cp -r "$work/part" "$work/part3"
 "$drape" --restart "$work/part/checkpoint.h5" --set solver.steps=$end --threads 2 --quiet
 [[ $(field "$work/part" steps) == "$end" ]] || fail "the restarted run did not reach step $end"
 [[ $(sum "$work/part") == "$(sum "$work/ref")" ]] ||
   fail "restarted at step $cut (split at $split, eased $eased %): $(sum "$work/part") vs $(sum "$work/ref")"
 echo "ok split at step $split easing up to $eased %, restarted at $cut on 1 rank of 2: $(sum "$work/ref")"
+# 3 ranks go on from the same checkpoint: each reads its own particles' and
+# ghosts' eased lengths only.
+OMP_NUM_THREADS=1 "$mpiexec" -n 3 "$drape" --restart "$work/part3/checkpoint.h5" --set solver.steps=$end --quiet
+[[ $(sum "$work/part3") == "$(sum "$work/ref")" ]] ||
+  fail "restarted at step $cut on 3 ranks: $(sum "$work/part3") vs $(sum "$work/ref")"
+echo "ok restarted at $cut on 3 ranks of 2: $(sum "$work/ref")"
