@@ -512,6 +512,35 @@ TEST(CliBad, MultigridWithAmrcOnTwoRanks) {
                               "with amrc.enabled = true runs on one rank only");
 }
 
+// A restart takes its thread count from its own launch (OMP_NUM_THREADS,
+// --threads or --set parallel.threads), not from the run that wrote the
+// checkpoint with --threads 2.
+TEST(Cli, RestartTakesThisLaunchsThreads) {
+  const fs::path dir = tmp_dir() / "ck-threads";
+  const Result r = run_drape({"--set", "cloth.particles=[9,9]", "--threads", "2", "--set", "solver.steps=2", "--set",
+                              "output.checkpoint_every=2", "--set", "output.picture=false", "--quiet", "--output",
+                              dir.string()},
+                             "ck-threads");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::regex two("\"threads\": 2\\b"), one("\"threads\": 1\\b");
+  ASSERT_TRUE(std::regex_search(slurp(dir / "report.json"), two));
+  const std::string ck = (dir / "checkpoint.h5").string();
+  struct Case {
+    std::vector<std::string> args;
+    const std::regex& threads;
+  };
+  const std::vector<Case> cases = {{{}, one}, {{"--set", "parallel.threads=2"}, two}, {{"--threads", "2"}, two}};
+  int k = 0;
+  for (const Case& c : cases) {
+    const fs::path out = tmp_dir() / ("ck-threads-" + std::to_string(k++));
+    std::vector<std::string> args = {"--restart", ck, "--set", "solver.steps=3", "--quiet", "--output", out.string()};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const Result rr = run_drape(args, out.filename().string());
+    ASSERT_EQ(rr.status, 0) << rr.err;
+    EXPECT_TRUE(std::regex_search(slurp(out / "report.json"), c.threads)) << out;
+  }
+}
+
 // A checkpoint of 3 x 3 tiles with one value of its last particle's x1
 // changed: on 2 ranks only the rank holding that particle reads it, and the
 // digest summed over the ranks refuses the file on both.
