@@ -22,6 +22,7 @@
 
 #include "io/json.hpp"
 #include "mid_drape.hpp"
+#include "solver/checksum.hpp"
 
 namespace drape {
 namespace {
@@ -39,13 +40,35 @@ struct Timing {
   double seconds = 0, gradient = 0, loops = 0, balance = 0;
 };
 
-Timing run_once(int n, int iterations, Schedule sc, int threads, bool amrc) {
+// One cloth for every configuration, made once (at the most threads, so
+// that what is sized by the thread count fits them all): each run starts
+// from its saved state, with the active lists' learned cuts dropped, as a
+// cloth made anew would. Every run must end in the same state, bit for bit
+// (the results do not depend on threads or schedule): `checksum` says so.
+struct Bed {
+  Simulation w;
+  std::vector<double> z0;
+  double first_step;
+  Bed(int n, bool amrc) : w(mid_drape_scene(n), load_fabric("denim-A")) {
+    if (amrc) uneven_amrc_mesh(w);
+    jitter_mid_drape(w, 7);
+    z0 = w.cloth.z;
+    first_step = w.loop->minimizer().first_step();
+  }
+  void restore(Schedule sc) {
+    w.policy.schedule = sc;
+    std::copy(z0.begin(), z0.end(), w.cloth.z.begin());
+    w.loop->minimizer().set_first_step(first_step);
+    for (const ActiveList* l : {&w.lists.particles, &w.lists.edges, &w.lists.triples, &w.lists.shears})
+      l->cuts.clear();
+  }
+};
+
+Timing run_once(Bed& bed, int iterations, Schedule sc, int threads, std::string& checksum) {
   omp_set_num_threads(threads);
-  Simulation w(mid_drape_scene(n, sc), load_fabric("denim-A"));
-  if (amrc) uneven_amrc_mesh(w);
-  jitter_mid_drape(w, 7);  // the same state for every run
-  TimeLoop& loop = *w.loop;
-  Cloth& cloth = w.cloth;
+  bed.restore(sc);
+  TimeLoop& loop = *bed.w.loop;
+  Cloth& cloth = bed.w.cloth;
   CgSettings cs;
   cs.max_iterations = iterations;
   cs.tolerance = 0;
@@ -59,6 +82,7 @@ Timing run_once(int n, int iterations, Schedule sc, int threads, bool amrc) {
   r.gradient = tm.seconds[kGradient] + tm.seconds[kLineSearch];
   r.loops = loop_clock().wall - c0.wall;
   r.balance = r.loops > 0 ? (loop_clock().busy - c0.busy) / (r.loops * threads) : 1.0;
+  checksum = state_checksum(cloth, bed.w.tiling, bed.w.owned(), bed.w.red()).hex();
   return r;
 }
 
@@ -98,11 +122,21 @@ int main(int argc, char** argv) {
   // times[schedule][c] (thread count counts[c]) over the rounds
   std::vector<std::vector<std::vector<double>>> times(4, std::vector<std::vector<double>>(nc));
   std::vector<std::vector<std::vector<double>>> grads = times, loops = times, balance = times;
+  omp_set_num_threads(counts.back());
+  Bed bed(n, amrc);
+  std::string first_checksum;
   for (int r = 0; r < repeat; ++r)
     for (int si = 0; si < 4; ++si)
       for (int c = 0; c < nc; ++c) {
         const int p = counts[c];
-        const Timing t = run_once(n, iterations, schedules[si], p, amrc);
+        std::string checksum;
+        const Timing t = run_once(bed, iterations, schedules[si], p, checksum);
+        if (first_checksum.empty()) first_checksum = checksum;
+        if (checksum != first_checksum) {
+          std::fprintf(stderr, "scaling: %s at %d thread(s) ended in state %s, not %s: the runs are not alike\n",
+                       to_string(schedules[si]), p, checksum.c_str(), first_checksum.c_str());
+          return 1;
+        }
         times[si][c].push_back(t.seconds);
         grads[si][c].push_back(t.gradient);
         loops[si][c].push_back(t.loops);
