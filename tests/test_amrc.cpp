@@ -263,11 +263,79 @@ TEST(Criterion, APassIsItsOwnMirrorImage) {
 // bit l: merging the level-l cell round it would): a flat cloth coarsens
 // everywhere but where a merge would cut in, and a leaf holding a particle
 // placed inside splits down to the finest mesh.
+// The criterion on its values, as adapt() once read them: each leaf's and
+// each parent's largest indicator and speed (from 0) against the
+// thresholds. The reference for the bits adapt() reads now.
+AdaptStats adapt_by_values(Quadtree& t, const std::vector<double>& ind, const std::vector<double>& speed,
+                           const Thresholds& th) {
+  auto largest = [&](const Cell& c, const std::vector<double>& f) {
+    double m = 0;
+    for (int i = c.i; i <= t.i_end(c); ++i)
+      for (int j = c.j; j <= t.j_end(c); ++j) m = std::max(m, f[size_t(i) * t.nj() + j]);
+    return m;
+  };
+  auto scale = [&](int level) { return th.by_width ? std::ldexp(1.0, level - t.max_level()) : 1.0; };
+  AdaptStats st;
+  std::vector<Cell> leaves;
+  t.leaves(leaves);
+  for (const Cell& c : leaves)
+    if (t.leaf_at(c.i, c.j) == c && t.can_refine(c) && largest(c, ind) * scale(c.level) > th.refine) {
+      t.refine(c);
+      ++st.refined;
+    }
+  t.leaves(leaves);
+  std::vector<Cell> merge;
+  for (const Cell& c : leaves) {
+    const int l = c.level + 1;
+    const Cell parent{(c.i >> l) << l, (c.j >> l) << l, l};
+    if (c.level >= t.max_level() || parent.i != c.i || parent.j != c.j) continue;
+    if (t.can_coarsen(parent) && largest(parent, ind) * scale(c.level) < th.coarsen &&
+        largest(parent, speed) < th.coarsen_speed)
+      merge.push_back(parent);
+  }
+  for (const Cell& c : merge) st.coarsened += t.coarsen(c) ? 1 : 0;
+  return st;
+}
+
+// Random indicators and speeds, some at the thresholds exactly and scaled
+// by the leaf width: adapt() on the bits builds the same trees, pass after
+// pass, as the largest values do.
+TEST(Criterion, BitsSplitAndMergeAsTheLargestValues) {
+  std::mt19937 rng(11);
+  for (bool by_width : {false, true}) {
+    const Thresholds th{0.4, 0.1, 0.05, by_width};
+    Quadtree bits(kNi, kNj, kMaxLevel), values(kNi, kNj, kMaxLevel);
+    std::vector<Cell> scratch;
+    int changed = 0;
+    for (int pass = 0; pass < 12; ++pass) {
+      // A band of rows bent (some exactly at refine over a level's scale),
+      // elsewhere small values, some exactly at coarsen (scaled alike); a
+      // few particles at coarsen_speed.
+      std::vector<double> ind(size_t(kNi) * kNj), speed(ind.size());
+      const int band = int(rng() % (kNi - 3));
+      for (size_t p = 0; p < ind.size(); ++p) {
+        const int i = int(p / kNj), k = int(rng() % 4);
+        const bool bent = i >= band && i < band + 3;
+        ind[p] = bent ? (rng() % 2 ? 0.4 : 0.9) * std::ldexp(1.0, k)
+                      : (rng() % 3 ? 0.01 * (rng() % 5) : 0.1 * std::ldexp(1.0, k));
+        speed[p] = rng() % 40 == 0 ? 0.05 : 0.01;
+      }
+      const AdaptStats a = adapt(bits, ind, th, scratch, &speed);
+      const AdaptStats b = adapt_by_values(values, ind, speed, th);
+      ASSERT_EQ(bits.levels(), values.levels()) << "pass " << pass << (by_width ? ", by width" : "");
+      EXPECT_EQ(a.refined, b.refined);
+      EXPECT_EQ(a.coarsened, b.coarsened);
+      changed += a.refined + a.coarsened;
+    }
+    EXPECT_GT(changed, 20) << "the passes changed too little to tell";
+  }
+}
+
 TEST(Criterion, NoLeafCutsIntoTheObstacle) {
   const std::vector<double> flat(size_t(kNi) * kNj, 0.0);
-  std::vector<double> inside(flat.size(), 0.0);
+  std::vector<uint32_t> inside(flat.size(), 0);
   const int64_t stays = int64_t(9) * kNj + 5;  // merging level 2 round (9, 5) would cut in
-  inside[stays] = 4.0;                         // bit 2
+  inside[stays] = 4u;                          // bit 2
   Quadtree t(kNi, kNj, kMaxLevel);
   std::vector<Cell> scratch;
   for (int pass = 0; pass < 10; ++pass) adapt(t, flat, Thresholds{1.0, 0.5}, scratch, nullptr, &inside);
@@ -278,8 +346,8 @@ TEST(Criterion, NoLeafCutsIntoTheObstacle) {
   // Now the coarse leaf round (17, 13) places that particle inside: it splits to the finest.
   const int64_t cut = int64_t(17) * kNj + 13;
   ASSERT_GT(t.leaf_at(17, 13).level, 0);
-  std::fill(inside.begin(), inside.end(), 0.0);
-  inside[cut] = 1.0;
+  std::fill(inside.begin(), inside.end(), 0u);
+  inside[cut] = 1u;
   for (int pass = 0; pass < 4; ++pass) adapt(t, flat, Thresholds{1.0, 0.5}, scratch, nullptr, &inside);
   ASSERT_TRUE(t.balanced());
   for (int ci : {16, 17})
@@ -545,14 +613,14 @@ TEST(AmrcNear, MaskMatchesTheLoopOverEveryPair) {
     Amrc amrc(w.cloth, 3, true);
     amrc.restore(std::vector<uint8_t>(size_t(n - 1) * (n - 1), uint8_t(level)));
     amrc.apply(w.cloth, w.fabric.density, w.scene.cloth.shear);
-    std::vector<double> mask(w.cloth.grid.n(), -1.0);
+    std::vector<uint32_t> mask(w.cloth.grid.n(), ~0u);
     amrc.near_sheets(w.cloth, pair, {}, mask);
     std::array<int, 2 * kKeepFine> set{};
     int active = 0;
     for (int64_t p = 0; p < w.cloth.grid.n(); ++p) {
       const unsigned want = near_mask_by_pairs(w.cloth, amrc.tree(), pair, p);
       if (w.cloth.active(p)) {
-        ASSERT_EQ(unsigned(mask[p]), want) << "level " << level << ", particle " << p;
+        ASSERT_EQ(mask[p], want) << "level " << level << ", particle " << p;
         ++active;
       }
       for (int b = 0; b < 2 * int(kKeepFine); ++b) set[b] += (want >> b) & 1;

@@ -50,8 +50,7 @@ void place(const Corners& k, const double* x, double* y) {
 void Amrc::memory(MemoryTable& t) const {
   auto cap = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   t.add("Amrc", "trees' levels", cap(tree_.levels()) + cap(old_.levels()));
-  t.add("Amrc", "criterion fields (indicator, speed, inside, near)",
-        cap(indicator_) + cap(speed_) + cap(inside_) + cap(near_));
+  t.add("Amrc", "criterion's bits (indicator and speed, inside, near)", cap(marks_) + cap(inside_) + cap(near_));
   t.add("Amrc", "near sheets' packed particles and tile boxes",
         cap(packed_ids_) + cap(packed_at_) + cap(packed_x_) + cap(tile_box_) + cap(tile_offset_));
   t.add("Amrc", "leaves (adapt's scratch)", cells_);
@@ -61,9 +60,8 @@ void Amrc::memory(MemoryTable& t) const {
 
 Amrc::Amrc(const Cloth& c, int max_level, bool near)
     : tree_(c.grid.ni, c.grid.nj, max_level), old_(tree_) {
-  indicator_.assign(c.grid.n(), 0.0);
-  speed_.assign(c.grid.n(), 0.0);
-  inside_.assign(c.grid.n(), 0.0);
+  marks_.assign(c.grid.n(), 0);
+  inside_.assign(c.grid.n(), 0);
   if (near) make_room_near(c);
   cells_.reserve(size_t(c.grid.ni - 1) * (c.grid.nj - 1));
   was_active_.assign(c.grid.n(), 0);
@@ -74,7 +72,7 @@ Amrc::Amrc(const Cloth& c, int max_level, bool near)
 }
 
 void Amrc::make_room_near(const Cloth& c) {
-  near_.assign(c.grid.n(), 0.0);
+  near_.assign(c.grid.n(), 0);
   packed_ids_.assign(c.grid.n(), 0);
   packed_at_.assign(c.grid.n(), -1);
   packed_x_.assign(3 * c.grid.n(), 0.0);
@@ -88,18 +86,30 @@ void Amrc::make_room_near(const Cloth& c) {
   tile_box_.assign(6 * tile_offset_.back(), 0.0);
 }
 
-void Amrc::indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
+void Amrc::criterion(const Cloth& c, const Thresholds& th, const AdaptShare& share, std::vector<uint32_t>& out) const {
   const double* x = c.x();
+  const int top = tree_.max_level();
   per_particle(c, share, out, [&](int64_t p) {
     double m = 0;
     for (int d = 0; d < 2; ++d)
       if (c.triple_on_at(2 * p + d))
         m = std::max(m, turning_angle(x + 3 * c.prev_at(d, p), x + 3 * p, x + 3 * c.next_at(d, p)));
-    return m;
+    // x1 - x2 is the step the next prediction extrapolates (time_loop.cpp).
+    double speed = 0;
+    if (th.coarsen_speed > 0 && c.active(p)) {
+      const double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
+      double s = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double dk = x1[k] - x2[k];
+        s += dk * dk;
+      }
+      speed = std::sqrt(s) / c.dt_prev;
+    }
+    return criterion_bits(m, speed, th, top);
   });
 }
 
-void Amrc::inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<double>& out) const {
+void Amrc::inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<uint32_t>& out) const {
   const double* x = c.x();
   const int top = tree_.max_level();
   per_particle(c, share, out, [&](int64_t p) {
@@ -113,21 +123,7 @@ void Amrc::inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, s
     unsigned mask = cuts(corners_of(tree_, i, j)) ? 1u : 0u;
     for (int l = 1; l <= top; ++l)
       if (cuts(corners_in(tree_, Cell{(ci >> l) << l, (cj >> l) << l, l}, i, j))) mask |= 1u << l;
-    return double(mask);
-  });
-}
-
-void Amrc::speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const {
-  // x1 - x2 is the step the next prediction extrapolates (time_loop.cpp).
-  per_particle(c, share, out, [&](int64_t p) {
-    if (!c.active(p)) return 0.0;
-    const double *x1 = c.x1_at(p), *x2 = c.x2_at(p);
-    double s = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double d = x1[k] - x2[k];
-      s += d * d;
-    }
-    return std::sqrt(s) / c.dt_prev;
+    return mask;
   });
 }
 
@@ -166,15 +162,13 @@ void Amrc::fill_inactive(Cloth& c) const {
 
 AdaptStats Amrc::adapt(Cloth& c, double density, bool shear, const Thresholds& th, const AdaptShare& share,
                        const Obstacle* obstacle) {
-  indicator(c, share, indicator_);
-  if (th.coarsen_speed > 0) speeds(c, share, speed_);
+  criterion(c, th, share, marks_);
   const bool solid = obstacle && obstacle->shape != ObstacleShape::None;
   if (solid) inside(c, *obstacle, share, inside_);
   old_ = tree_;
   const bool near = th.pair_distance > 0;
   if (near) near_sheets(c, th.pair_distance, share, near_);
-  const AdaptStats st = drape::adapt(tree_, indicator_, th, cells_, th.coarsen_speed > 0 ? &speed_ : nullptr,
-                                     solid ? &inside_ : nullptr, near ? &near_ : nullptr);
+  const AdaptStats st = drape::adapt(tree_, marks_, th, cells_, solid ? &inside_ : nullptr, near ? &near_ : nullptr);
   if (st.refined == 0 && st.coarsened == 0) return st;
   carry_over(c, density, shear);
   return st;

@@ -18,7 +18,7 @@
 
 namespace drape {
 
-// Where a rank computes the criterion: its tiles; `reducer` makes the field
+// Where a rank computes the criterion: its tiles; `reducer` makes its bits
 // whole on every rank, so every rank adapts its copy of the tree alike.
 struct AdaptShare {
   const Tiling* tiling = nullptr;  // none: every particle (one rank)
@@ -36,22 +36,21 @@ class Amrc {
   // A checkpoint's tree (its finest intervals' leaf levels).
   void restore(const std::vector<uint8_t>& levels) { tree_.set_levels(levels); }
 
-  // The criterion per particle: the largest turning angle (rad) of the mesh
-  // lines through it, at its active triples; 0 elsewhere.
-  void indicator(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
+  // The criterion per particle, as criterion_bits: the indicator is the
+  // largest turning angle (rad) of the mesh lines through it, at its active
+  // triples (0 elsewhere), the speed its speed as the next step starts.
+  void criterion(const Cloth& c, const Thresholds& th, const AdaptShare& share, std::vector<uint32_t>& out) const;
   // Per particle, where the mesh would place it inside the obstacle (the
   // mask criterion.hpp's adapt takes): bit 0, on the leaf it lies in now;
   // bit l, on the level-l cell round it, merged.
-  void inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<double>& out) const;
+  void inside(const Cloth& c, const Obstacle& ob, const AdaptShare& share, std::vector<uint32_t>& out) const;
   // Per active particle, the near mask criterion.hpp's adapt takes, for
   // self-contact at pair distance D: bit l, a particle of the cloth that is
   // not its mesh neighbour lies within split_reach(l), bit kKeepFine + l,
   // within keep_reach(l) (levels up to one above its coarsest leaf's).
   // Only pairs of particles are checked, so a leaf must split while another
   // sheet could still reach its surface unseen (near.cpp).
-  void near_sheets(const Cloth& c, double pair_distance, const AdaptShare& share, std::vector<double>& out);
-  // Each active particle's speed (m/s) as the next step starts; 0 elsewhere.
-  void speeds(const Cloth& c, const AdaptShare& share, std::vector<double>& out) const;
+  void near_sheets(const Cloth& c, double pair_distance, const AdaptShare& share, std::vector<uint32_t>& out);
 
   // One adaptation of the tree to the cloth; when the mesh changes, carries
   // the state over and rebuilds the cloth's mesh (the caller rebuilds lists).
@@ -89,7 +88,7 @@ class Amrc {
   void make_room_near(const Cloth& c);
 
   Quadtree tree_, old_;
-  std::vector<double> indicator_, speed_, inside_, near_;
+  std::vector<uint32_t> marks_, inside_, near_;  // the criterion's bits (criterion.hpp)
   // near_sheets's: the active particles (ids, positions) packed in id order,
   // each particle's packed index (-1: inactive), and the boxes of a pyramid
   // of grid tiles (from tile_offset_[k] at level k; near.cpp).

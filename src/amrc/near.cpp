@@ -120,7 +120,7 @@ constexpr int kStackDepth = 16 + 3 * 32;
 
 }  // namespace
 
-void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& share, std::vector<double>& out) {
+void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& share, std::vector<uint32_t>& out) {
   const Grid& g = c.grid;
   const int64_t n = g.n();
   if (int64_t(packed_at_.size()) != n) throw std::logic_error("Amrc::near_sheets: built without `near` room");
@@ -159,10 +159,10 @@ void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& s
   // The mask is an OR over candidates: the same in any order.
   per_particle(c, share, out, [&](int64_t p) {
     const int64_t kp = packed_at_[p];
-    if (kp < 0) return 0.0;
+    if (kp < 0) return 0u;
     const int ip = g.i_of(p), jp = g.j_of(p);
     const int levels = std::min(top_level, coarsest_leaf(tree_, ip, jp) + 1);
-    if (levels == 0) return 0.0;
+    if (levels == 0) return 0u;
     const double* xp = xs + 3 * kp;
     const double far2 = keep2[levels];
     unsigned mask = 0;
@@ -208,7 +208,7 @@ void Amrc::near_sheets(const Cloth& c, double pair_distance, const AdaptShare& s
       for (int ci = 2 * v.ti; ci < std::min(2 * v.ti + 2, pyr.dim_i(v.k - 1)); ++ci)
         for (int cj = 2 * v.tj; cj < std::min(2 * v.tj + 2, pyr.dim_j(v.k - 1)); ++cj) stack[top++] = {v.k - 1, ci, cj};
     }
-    return double(mask);
+    return mask;
   });
 }
 

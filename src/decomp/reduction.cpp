@@ -51,6 +51,14 @@ void MpiReducer::max_each(double* a, int64_t n) const {
   seconds += MPI_Wtime() - t0;
 }
 
+void MpiReducer::or_each(uint32_t* a, int64_t n) const {
+  const double t0 = MPI_Wtime();
+  const int64_t piece = int64_t(1) << 30;  // MPI counts are int
+  for (int64_t k = 0; k < n; k += piece)
+    MPI_Allreduce(MPI_IN_PLACE, a + k, int(std::min(piece, n - k)), MPI_UINT32_T, MPI_BOR, comm_);
+  seconds += MPI_Wtime() - t0;
+}
+
 int MpiReducer::ranks() const {
   int n = 1;
   MPI_Comm_size(comm_, &n);

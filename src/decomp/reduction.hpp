@@ -18,6 +18,7 @@ class MpiReducer : public Reducer {
   uint64_t sum_u64(uint64_t v) const override;
   int64_t sum_i64(int64_t v) const override;
   void max_each(double* a, int64_t n) const override;
+  void or_each(uint32_t* a, int64_t n) const override;
   int ranks() const override;
   void counts(int64_t n, std::vector<int64_t>& out) const override;
   // In rounds of at most kPiece bytes a rank (MPI's counts are int).

@@ -24,6 +24,9 @@ class Reducer {
   // fills where it owns (0 elsewhere, values >= 0; or -HUGE_VAL elsewhere,
   // any values) becomes whole everywhere.
   virtual void max_each(double* a, int64_t n) const = 0;
+  // a[k] = the bitwise or of the ranks' a[k], for k < n (0 where a rank
+  // does not fill it): bit fields whole everywhere.
+  virtual void or_each(uint32_t* a, int64_t n) const = 0;
   // How many ranks hand in partials.
   virtual int ranks() const = 0;
   // out[k] = rank k's n, on every rank.
@@ -67,6 +70,7 @@ class LocalReducer : public Reducer {
   uint64_t sum_u64(uint64_t v) const override { return v; }
   int64_t sum_i64(int64_t v) const override { return v; }
   void max_each(double*, int64_t) const override {}
+  void or_each(uint32_t*, int64_t) const override {}
   int ranks() const override { return 1; }
   void counts(int64_t n, std::vector<int64_t>& out) const override { out.assign(1, n); }
   void gather_bytes(const void* mine, const std::vector<int64_t>& bytes, void* all) const override {
