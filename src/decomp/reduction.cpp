@@ -43,19 +43,26 @@ int64_t MpiReducer::sum_i64(int64_t v) const {
   return v;
 }
 
+namespace {
+
+// An element-wise reduction in place, in pieces (MPI counts are int).
+template <class T>
+void reduce_each(T* a, int64_t n, MPI_Datatype type, MPI_Op op, MPI_Comm comm) {
+  const int64_t piece = int64_t(1) << 30;
+  for (int64_t k = 0; k < n; k += piece) MPI_Allreduce(MPI_IN_PLACE, a + k, int(std::min(piece, n - k)), type, op, comm);
+}
+
+}  // namespace
+
 void MpiReducer::max_each(double* a, int64_t n) const {
   const double t0 = MPI_Wtime();
-  const int64_t piece = int64_t(1) << 30;  // MPI counts are int
-  for (int64_t k = 0; k < n; k += piece)
-    MPI_Allreduce(MPI_IN_PLACE, a + k, int(std::min(piece, n - k)), MPI_DOUBLE, MPI_MAX, comm_);
+  reduce_each(a, n, MPI_DOUBLE, MPI_MAX, comm_);
   seconds += MPI_Wtime() - t0;
 }
 
 void MpiReducer::or_each(uint32_t* a, int64_t n) const {
   const double t0 = MPI_Wtime();
-  const int64_t piece = int64_t(1) << 30;  // MPI counts are int
-  for (int64_t k = 0; k < n; k += piece)
-    MPI_Allreduce(MPI_IN_PLACE, a + k, int(std::min(piece, n - k)), MPI_UINT32_T, MPI_BOR, comm_);
+  reduce_each(a, n, MPI_UINT32_T, MPI_BOR, comm_);
   seconds += MPI_Wtime() - t0;
 }
 
