@@ -512,6 +512,37 @@ TEST(CliBad, MultigridWithAmrcOnTwoRanks) {
                               "with amrc.enabled = true runs on one rank only");
 }
 
+// An AMRC checkpoint whose tree is damaged (one leaf level above
+// amrc.max_level): the digest cannot be checked before the mesh is made from
+// the tree, so the tree itself is refused, exit 2, nothing written.
+TEST(CliBad, CheckpointWithADamagedTree) {
+  const fs::path dir = tmp_dir() / "ck-tree";
+  const Result r = run_drape({"--set", "cloth.particles=[17,17]", "--set", "amrc.enabled=true", "--set",
+                              "amrc.max_level=2", "--set", "solver.steps=2", "--set", "output.checkpoint_every=2",
+                              "--set", "output.picture=false", "--quiet", "--output", dir.string()},
+                             "ck-tree");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const fs::path damaged = tmp_dir() / "tree-damaged.h5";
+  fs::copy_file(dir / "checkpoint.h5", damaged, fs::copy_options::overwrite_existing);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(damaged.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const hid_t ds = H5Dopen2(f, "amrc_levels", H5P_DEFAULT);
+  ASSERT_GE(ds, 0);
+  std::vector<uint8_t> levels(16 * 16);
+  ASSERT_GE(H5Dread(ds, H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, levels.data()), 0);
+  levels[0] = 7;
+  ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, levels.data()), 0);
+  H5Dclose(ds);
+  H5Fclose(f);
+  const fs::path out = tmp_dir() / "ck-tree-out";
+  const Result bad = run_drape({"--restart", damaged.string(), "--output", out.string()}, "ck-tree-bad");
+  EXPECT_EQ(bad.status, 2) << bad.err;
+  EXPECT_NE(bad.err.find("AMRC tree is damaged"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // A restart takes its thread count from its own launch (OMP_NUM_THREADS,
 // --threads or --set parallel.threads), not from the run that wrote the
 // checkpoint with --threads 2.

@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "amrc/remesh.hpp"
 #include "amrc/sequence.hpp"
@@ -162,7 +163,13 @@ void Simulation::set_up_tree(int start_level) {
   amrc = std::make_unique<Amrc>(cloth, scene.amrc.enabled ? scene.amrc.max_level : sequence_level_,
                                 scene.amrc.enabled && scene.solver.self_contact);
   if (ck && !ck->amrc_levels.empty()) {
-    amrc->restore(ck->amrc_levels);
+    // Read on every rank alike, so every rank refuses a damaged tree here
+    // (before the digest, which needs the mesh it makes).
+    try {
+      amrc->restore(ck->amrc_levels);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("checkpoint " + ck->path + ": its AMRC tree is damaged (" + e.what() + ")");
+    }
     if (sequence_level_ > 0) sequence_level_ = amrc->tree().levels().empty() ? 0 : amrc->tree().levels()[0];
   } else if (sequence_level_ > 0) {
     amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, sequence_level_);
