@@ -18,12 +18,14 @@
 //                only when AMRC is on
 //
 // The digest hashes every particle's values with its global id together with
-// the scalars, scene and fabric; reading recomputes it, so a damaged or
-// truncated file is refused rather than restarted from.
+// the scalars, scene and fabric (a sum over particles: any split of them
+// adds up to it); a restart recomputes it, each rank over its own tiles, so
+// a damaged or truncated file is refused rather than restarted from.
 //
 // Writing is collective: each rank writes the blocks it owns into
 // checkpoint.h5.tmp, which is flushed to disk and then renamed over the
-// previous checkpoint, so a complete checkpoint is always on disk.
+// previous checkpoint, so a complete checkpoint is always on disk. Reading
+// is each rank's own: the metadata, then its held particles' rows.
 #include <mpi.h>
 
 #include <cstdint>
