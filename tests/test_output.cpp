@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "base/error.hpp"
+#include "io/h5.hpp"
 #include "io/output.hpp"
 #include "mesh/cloth.hpp"
 #include "support/files.hpp"
@@ -597,4 +598,51 @@ TEST(Picture, MillionParticlesRender) {
   const Drape d(1000);
   render_picture(d.view(), box_obstacle(), dir + "/drape.png", 1024, 768);
   expect_picture(dir + "/drape.png", 1024, 768);
+}
+
+// h5::read_particles reads a rank's held particles' rows: a dataset whose
+// every value encodes its particle and component, read back for sets of
+// particles with gaps, runs ending at a row's end and starting a row, a
+// single particle and none, each value where the set's order puts it.
+TEST(Hdf5Read, HeldParticlesComeBackInTheirOrder) {
+  const std::string dir = fresh_dir("read_particles");
+  const int ni = 7, nj = 5, comps = 3;
+  auto value = [](int64_t p, int k) { return 1000.0 * double(p) + k; };
+  std::vector<double> all(size_t(ni * nj * comps));
+  for (int64_t p = 0; p < ni * nj; ++p)
+    for (int k = 0; k < comps; ++k) all[size_t(3 * p + k)] = value(p, k);
+  const std::string path = dir + "/grid.h5";
+  {
+    const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t dims[3] = {hsize_t(ni), hsize_t(nj), hsize_t(comps)};
+    const hid_t space = H5Screate_simple(3, dims, nullptr);
+    const hid_t ds = H5Dcreate2(f, "x", H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, all.data()), 0);
+    H5Dclose(ds);
+    H5Sclose(space);
+    H5Fclose(f);
+  }
+  const std::vector<std::vector<int64_t>> sets = {
+      {0, 1, 2, 3, 4, 5, 6},         // a whole row and the next one's start
+      {3, 4, 5, 6, 12, 20, 21, 34},  // a run across a row's end, gaps, the last particle
+      {17},
+      {},
+  };
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  for (const std::vector<int64_t>& ids : sets) {
+    std::vector<double> got(ids.size() * comps + 1, -1.0);
+    h5::read_particles(f, "x", H5T_NATIVE_DOUBLE, ni, nj, comps, &ids, got.data());
+    for (size_t k = 0; k < ids.size(); ++k)
+      for (int c = 0; c < comps; ++c) EXPECT_EQ(got[3 * k + size_t(c)], value(ids[k], c)) << ids[k] << "." << c;
+    EXPECT_EQ(got.back(), -1.0) << "read past the held particles";
+  }
+  std::vector<double> whole(all.size());
+  h5::read_particles(f, "x", H5T_NATIVE_DOUBLE, ni, nj, comps, nullptr, whole.data());
+  EXPECT_EQ(whole, all);
+  // The wrong shape is refused, naming the dataset.
+  const std::vector<int64_t> one = {0};
+  double v[2];
+  EXPECT_THROW(h5::read_particles(f, "x", H5T_NATIVE_DOUBLE, ni, nj, 2, &one, v), std::runtime_error);
+  H5Fclose(f);
 }
