@@ -35,16 +35,6 @@ int fail_internal(const std::string& what) {
   drape::end_all_ranks(MPI_COMM_WORLD, what);
 }
 
-// Whether one of the --set overrides sets `key`.
-bool sets_key(const std::vector<std::string>& overrides, const std::string& key) {
-  for (const std::string& o : overrides) {
-    const std::string k = o.substr(0, o.find('='));
-    const size_t a = k.find_first_not_of(" \t"), b = k.find_last_not_of(" \t");
-    if (a != std::string::npos && k.substr(a, b - a + 1) == key) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -108,7 +98,7 @@ int main(int argc, char** argv) {
       // The thread count is this launch's, not the checkpoint's (the results
       // are the same on any): a run restarted on more ranks would otherwise
       // run its first launch's threads in each.
-      if (!sets_key(overrides, "parallel.threads")) scene.parallel.threads = 0;
+      if (!drape::overrides_key(overrides, "parallel.threads")) scene.parallel.threads = 0;
     } else {
       std::optional<std::string> cfg;
       if (!config_path.empty()) cfg = config_path;

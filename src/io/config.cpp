@@ -458,6 +458,12 @@ void check_restart_overrides(const std::vector<std::string>& overrides) {
   }
 }
 
+bool overrides_key(const std::vector<std::string>& overrides, const std::string& key) {
+  for (const std::string& o : overrides)
+    if (trim(o.substr(0, o.find('='))) == key) return true;
+  return false;
+}
+
 void check_particle_mass(const Scene& s, double density, const std::string& fabric) {
   const auto& c = s.cloth;
   const double mass = density * (c.size[0] / (c.particles[0] - 1)) * (c.size[1] / (c.particles[1] - 1));

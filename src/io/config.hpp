@@ -22,6 +22,8 @@ Scene load_scene_text(const std::string& toml, const std::string& origin,
 
 // Refuses --set keys that a restart must not change (InputError).
 void check_restart_overrides(const std::vector<std::string>& overrides);
+// Whether one of the --set overrides (key=value) sets `key`.
+bool overrides_key(const std::vector<std::string>& overrides, const std::string& key);
 
 // Refuses a cloth whose particle mass (the fabric's areal density times the
 // area per particle) is not a finite positive number; the scene and the
