@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
-# solver.preconditioner = "auto" (the default): with AMRC, which the
-# multigrid does not run with on several ranks, every mesh takes Jacobi on
-# one rank as on two, above the threshold too, and the two end in the same
-# state; "multigrid" itself is refused there (exit 2). Grid sequencing
-# (AMRC off) switches on the first mesh at or above the threshold, on one
-# rank and on two alike (self-contact on: its blocks across ranks).
+# solver.preconditioner = "auto" (the default): with AMRC every adapted mesh
+# takes the multigrid from the threshold on, and Jacobi below it, on one
+# rank as on two, and the two end in the same state. Grid sequencing (AMRC
+# off) switches on the first mesh at or above the threshold, on one rank and
+# on two alike (self-contact on: its blocks across ranks).
 # Usage: auto_preconditioner_np2.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4
@@ -12,22 +11,23 @@ rm -rf "$work" && mkdir -p "$work"
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 scene=(--config "$src/run/scenes/small-box.toml" --set "cloth.particles=[25,25]" --set solver.steps=3 --set cloth.height=0.401
        --set output.picture=false --quiet --set amrc.enabled=true --set amrc.max_level=2 --set amrc.every=3
-       --set 'solver.preconditioner="auto"' --set solver.multigrid_particles=1)
+       --set 'solver.preconditioner="auto"')
 builds() { report "$1" 'r["multigrid_gathered"]["builds"]'; }
 fail() { echo "FAIL: $*"; exit 1; }
 
-OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --output "$work/one" > "$work/one.out" 2>&1 ||
-  { cat "$work/one.out"; fail "one rank with AMRC, auto"; }
-[[ $(builds "$work/one") == 0 ]] || fail "one rank with AMRC: multigrid builds $(builds "$work/one")"
-[[ $(report "$work/one" 'r["iterations"] > 0') == true ]] || fail "one rank with AMRC: no iterations"
-OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --output "$work/two" \
-  > "$work/two.out" 2>&1 || { cat "$work/two.out"; fail "two ranks with AMRC, auto: refused"; }
-[[ $(builds "$work/two") == 0 ]] || fail "two ranks with AMRC: multigrid builds $(builds "$work/two")"
-[[ $(sum "$work/two") == $(sum "$work/one") ]] || fail "two ranks with AMRC do not end in one rank's state"
-status=0
-OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set 'solver.preconditioner="multigrid"' \
-  --output "$work/refused" > "$work/refused.out" 2>&1 || status=$?
-[[ $status == 2 ]] || fail "two ranks with AMRC, multigrid: exit $status, want 2"
+# The threshold above the mesh's 625 particles: Jacobi; at 1: the multigrid.
+for at in 1000 1; do
+  OMP_NUM_THREADS=1 "$drape" "${scene[@]}" --set solver.multigrid_particles=$at --output "$work/one-$at" \
+    > "$work/one-$at.out" 2>&1 || { cat "$work/one-$at.out"; fail "one rank with AMRC, auto, threshold $at"; }
+  [[ $(report "$work/one-$at" 'r["iterations"] > 0') == true ]] || fail "one rank with AMRC: no iterations"
+  OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${scene[@]}" --set solver.multigrid_particles=$at --output "$work/two-$at" \
+    > "$work/two-$at.out" 2>&1 || { cat "$work/two-$at.out"; fail "two ranks with AMRC, auto, threshold $at"; }
+  [[ $(builds "$work/two-$at") == $(builds "$work/one-$at") ]] ||
+    fail "threshold $at: multigrid builds $(builds "$work/two-$at") on two ranks, $(builds "$work/one-$at") on one"
+  [[ $(sum "$work/two-$at") == $(sum "$work/one-$at") ]] || fail "two ranks with AMRC do not end in one rank's state"
+done
+[[ $(builds "$work/one-1000") == 0 ]] || fail "AMRC below the threshold: multigrid builds $(builds "$work/one-1000")"
+(( $(builds "$work/one-1") > 0 )) || fail "AMRC above the threshold: no multigrid build"
 
 # Grid sequencing from 9 x 9 (81 particles) to 17 x 17 (289), ending there
 # (amrc.last_level): Jacobi on the first mesh, the multigrid on the second.
@@ -41,4 +41,4 @@ OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$drape" "${seq[@]}" --output "$work/seq2" > "
   { cat "$work/seq2.out"; fail "sequencing on two ranks, auto"; }
 [[ $(builds "$work/seq2") -gt 0 ]] || fail "sequencing on two ranks: no multigrid built"
 [[ $(sum "$work/seq2") == $(sum "$work/seq") ]] || fail "sequencing on two ranks does not end in one rank's state"
-echo "auto_preconditioner: Jacobi with AMRC on one rank and two alike, the multigrid from the threshold on without"
+echo "auto_preconditioner: the multigrid from the threshold on, with AMRC and without, on one rank and two alike"

@@ -29,9 +29,13 @@
 # power iteration's vectors and level 1's right-hand side's, and one
 # rank's none, and a 2-rank run stopped at step 20 and continued
 # on 3 ranks must end in the same state.
+# The amrc_multigrid case is the amrc case on the multigrid: hanging
+# particles fold into K's rows of their ends, which may be other ranks'
+# particles; it runs on 2, 3 and 4 ranks, must have run V-cycles on an
+# adapting mesh and rebalanced on several ranks.
 # Usage: ranks_agree.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR [CASES]
 # (CASES: some of the cases below, space-separated; default all but amrc_edges,
-# kinks and multigrid, which ctest runs as tests of their own)
+# kinks, multigrid and amrc_multigrid, which ctest runs as tests of their own)
 set -euo pipefail
 drape=$1 mpiexec=$2 src=$3 work=$4 cases=${5:-"newton slope cg amrc amrc_speed sequence"}
 rm -rf "$work" && mkdir -p "$work"
@@ -55,6 +59,7 @@ for method in $cases; do
     amrc) args+=("${amrc[@]}") ;;
     amrc_speed) args+=("${amrc[@]}" --set amrc.coarsen_speed=0.01) ;;
     amrc_edges) args+=("${amrc[@]}" "${edges[@]}") ;;
+    amrc_multigrid) args+=("${amrc[@]}" --set 'solver.preconditioner="multigrid"') ;;
     sequence) args+=("${sequence[@]}") ;;
     newton) args+=(--set solver.method=newton "${jacobi[@]}" --set solver.slope_line_search=false) ;;
     slope) args+=(--set solver.method=newton "${jacobi[@]}" --set solver.slope_line_search=true
@@ -69,7 +74,7 @@ for method in $cases; do
   fi
   OMP_NUM_THREADS=1 "$drape" "${args[@]}" --output "$work/$method-1"
   counts="2 4" threads=1
-  [[ $method == multigrid ]] && counts="2 3 4"
+  [[ $method == multigrid || $method == amrc_multigrid ]] && counts="2 3 4"
   for n in $counts; do
     threads=1
     [[ $method == multigrid && $n == 2 ]] && threads=2
@@ -85,10 +90,10 @@ for method in $cases; do
       { echo "$method: drape.h5 frames differ between 1 and $n ranks"; exit 1; }
     cmp -s "$work/$method-1/drape.png" "$work/$method-$n/drape.png" ||
       { echo "$method: drape.png differs between 1 and $n ranks"; exit 1; }
-    if [[ $method == amrc ]]; then
+    if [[ $method == amrc || $method == amrc_multigrid ]]; then
       moved=$(report "$work/$method-$n" 'sum(b["tiles_moved"] for b in r["rebalances"])')
-      (( moved > 0 )) || { echo "amrc: no tile migrated on $n ranks: the test does not cover a rebalance"; exit 1; }
-      echo "amrc: $n ranks rebalanced, $moved tile move(s) in all"
+      (( moved > 0 )) || { echo "$method: no tile migrated on $n ranks: the test does not cover a rebalance"; exit 1; }
+      echo "$method: $n ranks rebalanced, $moved tile move(s) in all"
     fi
     if [[ $method == multigrid ]]; then
       # No rank receives K whole: at a build, each receives level 1's rows (8 bytes a row,
@@ -135,6 +140,13 @@ for method in $cases; do
     "$drape" "${args[@]}" --set solver.band_active_set=false --output "$work/kinks-off" >/dev/null
     [[ $(sum "$work/kinks-1") != $(sum "$work/kinks-off") ]] ||
       { echo "kinks: the same state as without the active set: the case does not reach a re-solve"; exit 1; }
+  fi
+  if [[ $method == amrc_multigrid ]]; then
+    cycles=$(report "$work/$method-3" 'r["multigrid"][0]["cycles"] if r["multigrid"] else 0')
+    adapted=$(report "$work/$method-1" 'r["amrc"]["refined"] > 0 and r["particles_active"]["min"] < r["particles_active"]["max"]')
+    (( cycles > 0 )) && [[ $adapted == true ]] ||
+      { echo "amrc_multigrid: $cycles V-cycles on 3 ranks, the mesh adapted: $adapted"; exit 1; }
+    echo "amrc_multigrid: $cycles V-cycles on 3 ranks on an adapting mesh"
   fi
   if [[ $method == amrc_speed ]]; then
     merges() { report "$1" 'r["amrc"]["coarsened"]'; }

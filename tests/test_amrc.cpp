@@ -790,25 +790,24 @@ TEST(GridSequence, NextStageKnowsItsPreconditioner) {
 }
 
 
-// `auto`: Jacobi below solver.multigrid_particles, the multigrid from it on,
-// and Jacobi wherever the multigrid may not run; the explicit choices stay.
+// `auto`: Jacobi below solver.multigrid_particles, the multigrid from it on;
+// the explicit choices stay.
 TEST(GridSequence, AutoPreconditionerFromAMeshSize) {
   SolverSpec s;
   s.preconditioner = Preconditioner::Auto;
   s.multigrid_particles = 4096;
-  EXPECT_EQ(stage_preconditioner(s, 4095, true), Preconditioner::Jacobi);
-  EXPECT_EQ(stage_preconditioner(s, 4096, true), Preconditioner::Multigrid);
-  EXPECT_EQ(stage_preconditioner(s, 4096, false), Preconditioner::Jacobi);  // with AMRC
-  const SolverSpec mg = stage_solver(s, 4096, true), j = stage_solver(s, 4095, true);
+  EXPECT_EQ(stage_preconditioner(s, 4095), Preconditioner::Jacobi);
+  EXPECT_EQ(stage_preconditioner(s, 4096), Preconditioner::Multigrid);
+  const SolverSpec mg = stage_solver(s, 4096), j = stage_solver(s, 4095);
   EXPECT_EQ(mg.dt_max, s.multigrid_dt_max);
   EXPECT_EQ(mg.max_iterations, s.multigrid_max_iterations);
   EXPECT_EQ(j.dt_max, s.dt_max);
   EXPECT_EQ(j.max_iterations, s.max_iterations);
   s.preconditioner = Preconditioner::Jacobi;
-  EXPECT_EQ(stage_preconditioner(s, 1 << 20, true), Preconditioner::Jacobi);
+  EXPECT_EQ(stage_preconditioner(s, 1 << 20), Preconditioner::Jacobi);
   s.preconditioner = Preconditioner::Multigrid;
-  EXPECT_EQ(stage_preconditioner(s, 1, true), Preconditioner::Multigrid);
-  EXPECT_EQ(stage_solver(s, 1, true).dt_max, s.dt_max);  // explicit: the scene's own settings
+  EXPECT_EQ(stage_preconditioner(s, 1), Preconditioner::Multigrid);
+  EXPECT_EQ(stage_solver(s, 1).dt_max, s.dt_max);  // explicit: the scene's own settings
 }
 
 // A split's stretched edges: eased to 1 % strain, the others untouched, and

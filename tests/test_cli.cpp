@@ -461,6 +461,7 @@ TEST(CliBad, Checkpoint) {
       {"ck_text", {"--restart", text.string()}, {text.string(), "not an HDF5 file"}},
       {"ck_truncated", {"--restart", truncated.string()}, {truncated.string()}},
       {"ck_flipped", {"--restart", flipped.string()}, {flipped.string(), "damaged"}},
+      {"ck_flipped_dry", {"--dry-run", "--restart", flipped.string()}, {flipped.string(), "damaged"}},
       {"ck_header", {"--restart", header.string()}, {header.string(), "dataset 'flags'"}},
       {"ck_foreign", {"--restart", output.string()}, {output.string(), "not a drape checkpoint"}},
       {"ck_version", {"--restart", future.string()}, {"format version 99"}},
@@ -475,9 +476,12 @@ TEST(CliBad, Checkpoint) {
     expect_refused(c.label, c.args, c.says);
   }
   // Without --output a restart writes beside its checkpoint: a refused one
-  // leaves that directory as it was.
+  // leaves that directory as it was, and so does a dry run of a good one.
   const Result r = run_drape({"--restart", good.string(), "--set", "cloth.tile=3"}, "ck-in-place");
   EXPECT_EQ(r.status, 2) << r.err;
+  const Result dry = run_drape({"--dry-run", "--restart", good.string()}, "ck-dry");
+  EXPECT_EQ(dry.status, 0) << dry.err;
+  EXPECT_NE(dry.out.find("# restart from"), std::string::npos) << dry.out;
   EXPECT_EQ(snapshot(good.parent_path()), before);
 }
 
@@ -502,14 +506,6 @@ void expect_refused_on_two_ranks(const std::string& label, const std::string& se
 TEST(CliBad, MoreRanksThanTiles) {
   expect_refused_on_two_ranks("ranks", "--set 'cloth.particles=[8,8]' --set cloth.tile=8",
                               "2 ranks but the cloth has only 1 tile(s)");
-}
-
-// The multigrid preconditioner runs on one rank.
-TEST(CliBad, MultigridWithAmrcOnTwoRanks) {
-  expect_refused_on_two_ranks("mg-ranks",
-                              "--set 'cloth.particles=[17,17]' --set 'solver.preconditioner=\"multigrid\"' "
-                              "--set amrc.enabled=true",
-                              "with amrc.enabled = true runs on one rank only");
 }
 
 // An AMRC checkpoint whose tree is damaged (one leaf level above
@@ -597,6 +593,7 @@ TEST(CliBad, DamagedCheckpointOnTwoRanks) {
   bytes.at(last_x) ^= 0x01;  // the lowest bit of its x: still a plausible number
   spit(damaged, bytes);
   expect_refused_on_two_ranks("ck-tiles-damaged", "--restart " + sh(damaged.string()), "damaged");
+  expect_refused_on_two_ranks("ck-tiles-damaged-dry", "--dry-run --restart " + sh(damaged.string()), "damaged");
   // The undamaged file restarts on 2 ranks.
   const std::string cmd = clean_env() + " " + sh(MPIEXEC) + " -n 2 " + sh(DRAPE_BINARY) + " --restart " +
                           sh(good.string()) + " --set solver.steps=3 --quiet </dev/null >/dev/null 2>&1";

@@ -5,7 +5,8 @@
 // the state differs from the same run without self-contact; with the
 // multigrid preconditioner too. The cost's gradient and K assembled (the
 // multigrid's finest level, entry by entry) at a pressed fold are the same
-// on 1, 2 and 3 ranks, and so is a V-cycle with the finest level divided
+// on 1, 2 and 3 ranks (K on an AMRC mesh too, its hanging particles between
+// two ranks' particles), and so is a V-cycle with the finest level divided
 // over the ranks and whole.
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -326,6 +327,72 @@ TEST(MpiSelfContact, AssembledStiffnessSameOnOneTwoAndThreeRanks) {
   if (rank() == 0) {
     EXPECT_GT(one.K.rows, 0);
   }
+  expect_same_matrix(one, two, "2 ranks");
+  expect_same_matrix(one, three, "3 ranks");
+}
+
+// K at a pressed fold on an AMRC mesh: the wide strip starts on leaves 4
+// spacings wide, folded half a pair distance apart, and one adaptation splits
+// the leaves near the other sheet, so hanging particles lie on the coarse
+// sides around them. A hanging particle's terms fold into its ends' rows and
+// columns; an end may be another rank's particle. Counts over the ranks:
+// hanging particles leaning on this rank's particles with an end that is
+// another rank's.
+struct HangingGathered : Gathered {
+  int64_t hanging = 0, across = 0;
+};
+
+HangingGathered hanging_stiffness(int ranks) {
+  HangingGathered out;
+  int64_t counts[2] = {0, 0};
+  on_first_ranks(ranks, [&](MPI_Comm comm) {
+    Scene scene = wide_strip_scene(true);
+    scene.amrc.refine = 1e30;  // splits for the other sheet only
+    Simulation w(scene, test_fabric(), quiet_run("mpi_hanging_K_" + std::to_string(ranks)), comm);
+    fold(w, 0.5, 20);
+    w.start();
+    w.adapt();
+    w.model.dt = w.model.dt_prev = 1e-3;
+    w.loop->freeze_bend_axes();
+    Evaluator& ev = w.loop->evaluator();
+    ev.hysteresis_forces(w.cloth.z.data());
+    ev.evaluate(w.cloth.z.data(), nullptr);
+    std::vector<double> diag(w.cloth.z.size());
+    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+    if (ranks == 1) {
+      ev.assemble_stiffness(out.K);
+      out.ids = w.lists.particles.items;
+    } else {
+      RankRows rr;
+      rr.number(w.red(), w.tiling, w.lists.particles.items, w.cloth.grid.n());
+      BlockMatrix mine;
+      ev.assemble_stiffness(mine, &rr.column_of(), rr.size(), 1);
+      rr.gather_matrix(w.red(), mine, out.K);
+      out.ids = rr.ids();
+      const std::vector<int32_t>& col = rr.column_of();
+      std::vector<char> mine_p(size_t(w.cloth.grid.n()), 0);
+      for (int64_t p : w.lists.particles.items) mine_p[size_t(p)] = 1;
+      int64_t across = 0;  // one end this rank's, the other another rank's free particle
+      for (const HangingLink& l : w.lists.hanging)
+        across += (mine_p[l.a] && col[l.b] >= 0 && !mine_p[l.b]) || (mine_p[l.b] && col[l.a] >= 0 && !mine_p[l.a]);
+      counts[0] = w.red().sum_i64(across);
+    }
+    counts[1] = int64_t(w.lists.hanging.size());
+  });
+  quiet_bcast(counts, 2, MPI_INT64_T);
+  out.across = counts[0];
+  out.hanging = counts[1];
+  return out;
+}
+
+TEST(MpiSelfContact, AssembledStiffnessWithHangingParticlesSameOnOneTwoAndThreeRanks) {
+  const HangingGathered one = hanging_stiffness(1), two = hanging_stiffness(2), three = hanging_stiffness(3);
+  if (getenv("DRAPE_DEBUG_SELF") && rank() == 0)
+    printf("hanging particles %lld; between two ranks' particles: %lld on 2 ranks, %lld on 3\n",
+           (long long)one.hanging, (long long)two.across, (long long)three.across);
+  EXPECT_GT(one.hanging, 0) << "no hanging particle: the test does not cover them";
+  EXPECT_GT(two.across, 0) << "no hanging particle between two ranks' particles";
+  EXPECT_GT(three.across, 0) << "no hanging particle between two ranks' particles";
   expect_same_matrix(one, two, "2 ranks");
   expect_same_matrix(one, three, "3 ranks");
 }

@@ -35,6 +35,16 @@ int fail_internal(const std::string& what) {
   drape::end_all_ranks(MPI_COMM_WORLD, what);
 }
 
+// --dry-run of a restart: every rank reads its particles of the checkpoint
+// and the digest is checked over them, as the run would; nothing is written.
+void check_restart(const drape::Scene& scene, const drape::Fabric& fabric, const drape::CheckpointState& ck) {
+  drape::RunOptions opt;
+  opt.quiet = true;
+  opt.restart = &ck;
+  opt.set_up_only = true;
+  const drape::Simulation sim(scene, fabric, opt, MPI_COMM_WORLD);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -109,6 +119,7 @@ int main(int argc, char** argv) {
     if (threads > 0) scene.parallel.threads = threads;
     const std::string toml = drape::scene_to_toml(scene);
     if (dry_run) {
+      if (resume) check_restart(scene, fabric, *resume);
       if (root && resume)
         std::cout << "# restart from " << restart << " at step " << resume->step << "\n";
       if (root) std::cout << toml;

@@ -45,6 +45,7 @@ Simulation::Simulation(const Scene& s, const Fabric& f, const RunOptions& opt, M
     if (opt_.restart) check_restart_digest();  // before anything is written
     set_up_model();
   }
+  if (opt_.set_up_only) return;
   make_output_dir();
   rebuild_lists();
   sum_.active_min = sum_.active_max = sum_.active_final = active_particles(cloth);
@@ -74,19 +75,10 @@ void Simulation::refuse_unsupported() const {
     throw InputError("solver.self_contact = true (the default) needs solver.gradient = \"analytic\" (the "
                      "difference windows do not reach a particle's contact partners); set "
                      "solver.self_contact = false for the numeric gradient");
-  if (ranks_ > 1 && sv.preconditioner == Preconditioner::Multigrid && scene.amrc.enabled)
-    throw InputError("solver.preconditioner = \"multigrid\" with amrc.enabled = true runs on one rank only "
-                     "(K's rows do not yet reach another rank's hanging particles); run it without mpirun "
-                     "or use \"jacobi\"");
 }
 
-// `auto` takes the multigrid on fine meshes, but not with AMRC: several
-// ranks refuse it there (refuse_unsupported), and `auto` must pick the same
-// preconditioner on any number of ranks (the same results).
-bool Simulation::multigrid_allowed() const { return !scene.amrc.enabled; }
-
 SolverSpec Simulation::mesh_solver() const {
-  return stage_solver(scene.solver, sum_.active_final, multigrid_allowed());
+  return stage_solver(scene.solver, sum_.active_final);
 }
 
 const char* Simulation::stage_preconditioner_name() const {

@@ -38,6 +38,9 @@ struct RunOptions {
   std::string scene_toml;  // the resolved scene, stored in the outputs
   bool quiet = false;      // no progress lines
   const CheckpointState* restart = nullptr;  // continue from this checkpoint
+  // --dry-run of a restart: set up (each rank's particles read, the digest
+  // checked over the ranks), then nothing made or written; run() not called.
+  bool set_up_only = false;
 };
 
 // A step is calm (towards rest) below this speed: solver.rest_speed, or with
@@ -113,7 +116,6 @@ class Simulation {
   void refuse_unsupported() const;
   // The solver settings for the current mesh, `auto` resolved
   // (stage_solver), and the preconditioner's name a stage reports.
-  bool multigrid_allowed() const;
   SolverSpec mesh_solver() const;
   const char* stage_preconditioner_name() const;
   void set_up_mesh(const std::vector<int64_t>* held);

@@ -77,8 +77,8 @@ bool Simulation::finer_mesh_fits() {
   const StageTime last{stage, loop->preconditioner() == Preconditioner::Multigrid};
   const bool multigrid_next =
       scene.solver.method == SolverMethod::Newton &&
-      stage_preconditioner(scene.solver, uniform_level_particles(cloth.grid, sequence_level_ - 1),
-                           multigrid_allowed()) == Preconditioner::Multigrid;
+      stage_preconditioner(scene.solver, uniform_level_particles(cloth.grid, sequence_level_ - 1)) ==
+          Preconditioner::Multigrid;
   const double next = next_stage_seconds(last, stage_before_, multigrid_next);
   const double left = scene.solver.wall_limit - std::chrono::duration<double>(now - t0_).count();
   const bool fits = root_decides(comm_, scene.solver.wall_limit <= 0 || next < left);

@@ -105,9 +105,10 @@ void declare_solver(ParameterList& list) {
            "Newton's linear CG: `jacobi` (each particle's diagonal) or `multigrid` (a V-cycle over the "
            "grid's levels: 20x fewer iterations than Jacobi at 513 x 513, growing 3.9x from 65 to 513 against Jacobi's 9.5x; "
            "on several ranks the levels are built from all ranks' rows on every rank alike, the finest level's "
-           "sweeps run on each rank's own rows and the coarser levels on every rank, bitwise one rank's result, self-contact's blocks across ranks included; not with AMRC on several ranks) ([design.md §7](design.md)); `auto`: "
-           "each mesh (grid sequencing's stages) takes the multigrid from `multigrid_particles` active particles on, "
-           "Jacobi below it and with AMRC (which the multigrid does not run with on several ranks: `auto` chooses alike on any number of ranks)")
+           "sweeps run on each rank's own rows and the coarser levels on every rank, bitwise one rank's result, self-contact's blocks across ranks and AMRC's hanging particles included) "
+           "([design.md §7](design.md)); `auto`: "
+           "each mesh (grid sequencing's stages; with AMRC, the mesh after each adaptation) takes the multigrid "
+           "from `multigrid_particles` active particles on, Jacobi below it")
           .example("multigrid")
       .add("multigrid_particles", &SolverSpec::multigrid_particles, "", at_least(1),
            "auto: active particles from which a mesh takes the multigrid",

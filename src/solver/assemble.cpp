@@ -22,28 +22,35 @@ namespace {
 inline int64_t slot_at(const ActiveList& own, const ActiveList& ring, int64_t pos) {
   return pos < own.size() ? own.items[pos] : ring.items[pos - own.size()];
 }
-// One column's share of a row's term: the row it lands in and its weight.
+// A free particle's share of a hanging particle's terms: its grid id and weight.
 struct Share {
-  int32_t row;
+  int64_t id;
   double w;
 };
+// Equal ids' weights summed in the order met: the same sums whatever the
+// ids' columns are.
 void merge_shares(std::vector<Share>& s) {
-  std::stable_sort(s.begin(), s.end(), [](const Share& a, const Share& b) { return a.row < b.row; });
+  std::stable_sort(s.begin(), s.end(), [](const Share& a, const Share& b) { return a.id < b.id; });
   size_t o = 0;
   for (size_t k = 0; k < s.size(); ++k) {
-    if (o > 0 && s[o - 1].row == s[k].row) s[o - 1].w += s[k].w;
+    if (o > 0 && s[o - 1].id == s[k].id) s[o - 1].w += s[k].w;
     else s[o++] = s[k];
   }
   s.resize(o);
 }
 }  // namespace
 
-void Evaluator::assembly_maps() {
+// With global columns (several ranks) a hanging particle's ends may be
+// other ranks' free particles: its shares then land in their columns, so
+// a row folds in every hanging particle leaning on it, as on one rank.
+void Evaluator::assembly_maps(uint64_t column_stamp) {
   if (asm_stamp_ == lists_.stamp && lists_.stamp != 0 && asm_hanging_ == lists_.hanging.size() &&
-      !asm_index_.empty())
+      asm_map_columns_ == column_stamp && !asm_index_.empty())
     return;
   asm_stamp_ = lists_.stamp;
   asm_hanging_ = lists_.hanging.size();
+  asm_map_columns_ = column_stamp;
+  const int32_t* global = asm_columns_;
   const ActiveList& pl = lists_.particles;
   asm_index_.assign(size_t(c_.grid.n()), -1);
   for (int64_t r = 0; r < pl.size(); ++r) asm_index_[pl.items[r]] = int32_t(r);
@@ -55,10 +62,10 @@ void Evaluator::assembly_maps() {
   std::vector<int32_t>& hang_of = asm_hang_;
   for (size_t i = 0; i < hl.size(); ++i) hang_of[hl[i].h] = int32_t(i);
   auto add_end = [&](std::vector<Share>& out, int64_t e, double w) {
-    if (asm_index_[e] >= 0) out.push_back({asm_index_[e], w});
+    if (global ? global[e] >= 0 : asm_index_[e] >= 0) out.push_back({e, w});
     else if (hang_of[e] >= 0)
-      for (const Share& s : ex[hang_of[e]]) out.push_back({s.row, w * s.w});
-    // fixed (or another rank's) ends: no unknown behind them
+      for (const Share& s : ex[hang_of[e]]) out.push_back({s.id, w * s.w});
+    // fixed ends (one rank's columns: another rank's too): no unknown behind them
   };
   for (size_t k = hl.size(); k-- > 0;) {
     add_end(ex[k], hl[k].a, 1 - hl[k].t);
@@ -68,17 +75,20 @@ void Evaluator::assembly_maps() {
   hx_start_.assign(hl.size() + 1, 0);
   hx_.clear();
   for (size_t k = 0; k < hl.size(); ++k) {
-    for (const Share& s : ex[k]) hx_.push_back({s.row, s.w});
+    for (const Share& s : ex[k]) hx_.push_back({global ? global[s.id] : asm_index_[s.id], s.w});
     hx_start_[k + 1] = int64_t(hx_.size());
   }
-  // The transpose: per free row, the hanging particles that lean on it.
+  // The transpose: per free row of this rank, the hanging particles that lean on it.
   ht_start_.assign(size_t(pl.size()) + 1, 0);
-  for (const HxEntry& e : hx_) ++ht_start_[e.row + 1];
+  for (size_t k = 0; k < hl.size(); ++k)
+    for (const Share& s : ex[k])
+      if (asm_index_[s.id] >= 0) ++ht_start_[asm_index_[s.id] + 1];
   for (int64_t r = 0; r < pl.size(); ++r) ht_start_[r + 1] += ht_start_[r];
-  ht_.assign(hx_.size(), {0, 0.0});
+  ht_.assign(size_t(ht_start_[pl.size()]), {0, 0.0});
   std::vector<int64_t> fill(ht_start_.begin(), ht_start_.end() - 1);
   for (size_t k = 0; k < hl.size(); ++k)  // ascending k within a row: a fixed order
-    for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) ht_[fill[hx_[e].row]++] = {int32_t(k), hx_[e].w};
+    for (const Share& s : ex[k])
+      if (asm_index_[s.id] >= 0) ht_[fill[asm_index_[s.id]]++] = {int32_t(k), s.w};
   asm_pattern_ = false;
 }
 
@@ -89,7 +99,6 @@ template <class Add>
 void Evaluator::row_terms(int64_t r, Add&& add) const {
   // With global columns (several ranks): any rank's free particle has one.
   const int32_t* global = asm_columns_;
-  auto column = [&](int32_t row) { return global ? global[lists_.particles.items[row]] : row; };
   auto columns = [&](int64_t p, double w, const double* blk) {
     if (global && global[p] >= 0) {
       add(global[p], w, blk);
@@ -101,8 +110,8 @@ void Evaluator::row_terms(int64_t r, Add&& add) const {
       return;
     }
     const int32_t k = asm_hang_.empty() ? -1 : asm_hang_[p];
-    if (k >= 0)  // a hanging particle: its ends' rows, by its weights
-      for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(column(hx_[e].row), w * hx_[e].w, blk);
+    if (k >= 0)  // a hanging particle: its ends' columns, by its weights
+      for (int64_t e = hx_start_[k]; e < hx_start_[k + 1]; ++e) add(hx_[e].row, w * hx_[e].w, blk);
     // fixed, or (one rank's columns) another rank's: no unknown of this rank behind it
   };
   auto one = [&](int64_t p, int64_t pos, const GatherRow& g, double mass, double w) {
@@ -182,10 +191,10 @@ void Evaluator::assemble_stiffness(BlockMatrix& K, const std::vector<int32_t>* c
   list_rows();
   if (!keep_ || !kg_ready_)
     throw std::logic_error("Evaluator::assemble_stiffness: needs stiffness_diagonal's kept numbers");
-  assembly_maps();
   const int64_t rows = lists_.particles.size();
   asm_columns_ = column_of ? column_of->data() : nullptr;
   if (!column_of) columns = rows;
+  assembly_maps(column_of ? column_stamp : 0);
   // The columns change with the lists, self-contact's pairs and the global numbering only.
   if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds() || asm_column_stamp_ != column_stamp) {
     asm_pairs_ = self_.builds();

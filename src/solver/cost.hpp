@@ -723,15 +723,17 @@ class Evaluator {
   double edge_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;
   double triple_curvature_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;
   double shear_strain_at(const double* x, int64_t s, int64_t pos, const int32_t* slot = nullptr) const;
-  // assemble_stiffness's maps, for asm_stamp_'s lists: grid particle -> free
-  // row (-1 else) and -> hanging index (-1 else); each hanging particle as
-  // free rows and weights (hx_), and per free row the hanging particles
-  // leaning on it (ht_, the transpose).
+  // assemble_stiffness's maps, for asm_stamp_'s lists and the columns of
+  // asm_map_columns_: grid particle -> free row (-1 else) and -> hanging
+  // index (-1 else); each hanging particle as columns of K and weights
+  // (hx_), and per free row the hanging particles leaning on it (ht_,
+  // their indices and weights).
   struct HxEntry {
     int32_t row;
     double w;
   };
-  void assembly_maps();
+  void assembly_maps(uint64_t column_stamp);
+  uint64_t asm_map_columns_ = 0;
   template <class Add>
   void row_terms(int64_t r, Add&& add) const;
   template <class Columns>

@@ -56,14 +56,14 @@ const char* to_string(Preconditioner p) {
   return "?";
 }
 
-Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles, bool multigrid_allowed) {
+Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles) {
   if (s.preconditioner != Preconditioner::Auto) return s.preconditioner;
-  return multigrid_allowed && particles >= s.multigrid_particles ? Preconditioner::Multigrid : Preconditioner::Jacobi;
+  return particles >= s.multigrid_particles ? Preconditioner::Multigrid : Preconditioner::Jacobi;
 }
 
-SolverSpec stage_solver(const SolverSpec& s, int64_t particles, bool multigrid_allowed) {
+SolverSpec stage_solver(const SolverSpec& s, int64_t particles) {
   SolverSpec t = s;
-  t.preconditioner = stage_preconditioner(s, particles, multigrid_allowed);
+  t.preconditioner = stage_preconditioner(s, particles);
   if (s.preconditioner == Preconditioner::Auto && t.preconditioner == Preconditioner::Multigrid) {
     t.dt_max = s.multigrid_dt_max;
     t.max_iterations = s.multigrid_max_iterations;

@@ -164,15 +164,15 @@ const char* to_string(Preconditioner p);
 // The preconditioner a mesh of `particles` active particles is solved
 // with: `auto` takes the multigrid from solver.multigrid_particles on (its
 // linear iterations barely grow as the spacing halves, Jacobi's double, and
-// its longer steps pay for the builds only on fine meshes), Jacobi below,
-// and Jacobi wherever the multigrid is not allowed (with AMRC, which
-// several ranks refuse it); `jacobi` and `multigrid` as they are.
-Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles, bool multigrid_allowed);
+// its longer steps pay for the builds only on fine meshes), Jacobi below
+// (an AMRC mesh by its active particles after each adaptation);
+// `jacobi` and `multigrid` as they are.
+Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles);
 // The solver settings for that mesh: `auto`'s multigrid meshes take
 // multigrid_dt_max and multigrid_max_iterations (a step's linear budget
 // must not cut the multigrid's long steps short; Jacobi's dt rule reads
 // max_iterations, so its meshes keep theirs).
-SolverSpec stage_solver(const SolverSpec& s, int64_t particles, bool multigrid_allowed);
+SolverSpec stage_solver(const SolverSpec& s, int64_t particles);
 const char* to_string(AmrcIndicator i);
 
 }  // namespace drape
