@@ -197,6 +197,15 @@ TEST(MpiSelfContact, SameStateOnOneTwoAndThreeRanksWithAmrc) {
   EXPECT_NE(off.checksum, one.checksum);
 }
 
+// The step's anchors set at the cloth's present state (dt 1 ms).
+Evaluator& anchored(Simulation& w) {
+  w.model.dt = w.model.dt_prev = 1e-3;
+  w.loop->freeze_bend_axes();
+  Evaluator& ev = w.loop->evaluator();
+  ev.hysteresis_forces(w.cloth.z.data());
+  return ev;
+}
+
 // The fold pressed to half a pair distance, its unknowns jittered alike on
 // every rank count (same seed, whole grid), the step's anchors set.
 Evaluator& press(Simulation& w) {
@@ -204,11 +213,7 @@ Evaluator& press(Simulation& w) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   for (int64_t k = 0; k < 3 * w.cloth.grid.n(); ++k) w.cloth.z[k] += 0.1 * kH * u(rng);
-  w.model.dt = w.model.dt_prev = 1e-3;
-  w.loop->freeze_bend_axes();
-  Evaluator& ev = w.loop->evaluator();
-  ev.hysteresis_forces(w.cloth.z.data());
-  return ev;
+  return anchored(w);
 }
 
 // The cost's gradient at a folded strip pressed together and jittered (as
@@ -269,27 +274,34 @@ int64_t contact_ghost_blocks(const BlockMatrix& mine, const RankRows& rr, const 
   return n;
 }
 
+// K at ev's state into out (Newton's order: the settled cost, then the
+// diagonal); on several ranks numbered by rr, and this rank's rows returned.
+BlockMatrix gather_stiffness(Simulation& w, Evaluator& ev, int ranks, RankRows& rr, Gathered& out) {
+  ev.evaluate(w.cloth.z.data(), nullptr);
+  std::vector<double> diag(w.cloth.z.size());
+  ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
+  BlockMatrix mine;
+  if (ranks == 1) {
+    ev.assemble_stiffness(out.K);
+    out.ids = w.lists.particles.items;
+    return mine;
+  }
+  rr.number(w.red(), w.tiling, w.lists.particles.items, w.cloth.grid.n());
+  ev.assemble_stiffness(mine, &rr.column_of(), rr.size(), 1);
+  rr.gather_matrix(w.red(), mine, out.K);
+  out.ids = rr.ids();
+  return mine;
+}
+
 Gathered pressed_stiffness(int ranks) {
   Gathered out;
   int64_t counts[2] = {0, 0};
   on_first_ranks(ranks, [&](MPI_Comm comm) {
     Simulation w(strip_scene(true), test_fabric(), quiet_run("mpi_self_contact_K_" + std::to_string(ranks)), comm);
     Evaluator& ev = press(w);
-    ev.evaluate(w.cloth.z.data(), nullptr);  // Newton's order: the settled cost, then the diagonal
-    std::vector<double> diag(w.cloth.z.size());
-    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
-    if (ranks == 1) {
-      ev.assemble_stiffness(out.K);
-      out.ids = w.lists.particles.items;
-    } else {
-      RankRows rr;
-      rr.number(w.red(), w.tiling, w.lists.particles.items, w.cloth.grid.n());
-      BlockMatrix mine;
-      ev.assemble_stiffness(mine, &rr.column_of(), rr.size(), 1);
-      rr.gather_matrix(w.red(), mine, out.K);
-      out.ids = rr.ids();
-      counts[0] = w.red().sum_i64(contact_ghost_blocks(mine, rr, ev.self_contact()));
-    }
+    RankRows rr;
+    const BlockMatrix mine = gather_stiffness(w, ev, ranks, rr, out);
+    if (ranks > 1) counts[0] = w.red().sum_i64(contact_ghost_blocks(mine, rr, ev.self_contact()));
     counts[1] = w.red().sum_i64(pairs_in_contact(w));
   });
   quiet_bcast(counts, 2, MPI_INT64_T);
@@ -331,7 +343,7 @@ TEST(MpiSelfContact, AssembledStiffnessSameOnOneTwoAndThreeRanks) {
   expect_same_matrix(one, three, "3 ranks");
 }
 
-// K at a pressed fold on an AMRC mesh: the wide strip starts on leaves 4
+// K at a fold on an AMRC mesh: the wide strip starts on leaves 4
 // spacings wide, folded half a pair distance apart, and one adaptation splits
 // the leaves near the other sheet, so hanging particles lie on the coarse
 // sides around them. A hanging particle's terms fold into its ends' rows and
@@ -352,23 +364,9 @@ HangingGathered hanging_stiffness(int ranks) {
     fold(w, 0.5, 20);
     w.start();
     w.adapt();
-    w.model.dt = w.model.dt_prev = 1e-3;
-    w.loop->freeze_bend_axes();
-    Evaluator& ev = w.loop->evaluator();
-    ev.hysteresis_forces(w.cloth.z.data());
-    ev.evaluate(w.cloth.z.data(), nullptr);
-    std::vector<double> diag(w.cloth.z.size());
-    ev.stiffness_diagonal(w.cloth.z.data(), diag.data());
-    if (ranks == 1) {
-      ev.assemble_stiffness(out.K);
-      out.ids = w.lists.particles.items;
-    } else {
-      RankRows rr;
-      rr.number(w.red(), w.tiling, w.lists.particles.items, w.cloth.grid.n());
-      BlockMatrix mine;
-      ev.assemble_stiffness(mine, &rr.column_of(), rr.size(), 1);
-      rr.gather_matrix(w.red(), mine, out.K);
-      out.ids = rr.ids();
+    RankRows rr;
+    gather_stiffness(w, anchored(w), ranks, rr, out);
+    if (ranks > 1) {
       const std::vector<int32_t>& col = rr.column_of();
       std::vector<char> mine_p(size_t(w.cloth.grid.n()), 0);
       for (int64_t p : w.lists.particles.items) mine_p[size_t(p)] = 1;
