@@ -195,10 +195,10 @@ void Evaluator::assemble_stiffness(BlockMatrix& K, const std::vector<int32_t>* c
   asm_columns_ = column_of ? column_of->data() : nullptr;
   if (!column_of) columns = rows;
   assembly_maps(column_of ? column_stamp : 0);
-  // The columns change with the lists, self-contact's pairs and the global numbering only.
-  if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds() || asm_column_stamp_ != column_stamp) {
+  // The columns change with the lists, self-contact's pairs and the global
+  // numbering only (new maps for the first and last clear asm_pattern_).
+  if (!asm_pattern_ || K.rows != rows || asm_pairs_ != self_.builds()) {
     asm_pairs_ = self_.builds();
-    asm_column_stamp_ = column_stamp;
     build_pattern(K, rows, asm_scratch_, [&](int64_t r, auto&& push) {
       row_terms(r, [&](int32_t c, double, const double*) { push(c); });
     });

@@ -740,7 +740,6 @@ class Evaluator {
   static void rank_one(const double* kg, int n, int part, const int64_t* ids, double w, Columns&& columns);
   std::vector<int32_t> asm_index_, asm_hang_;
   const int32_t* asm_columns_ = nullptr;  // assemble_stiffness's global columns, while it runs
-  uint64_t asm_column_stamp_ = 0;
   std::vector<int64_t> hx_start_, ht_start_;
   std::vector<HxEntry> hx_, ht_;
   uint64_t asm_stamp_ = 0, asm_pairs_ = 0;
