@@ -102,6 +102,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   // mesh (its unknown particles over all ranks, its spacing).
   j.value("method", to_string(scene.solver.method));
   j.value("preconditioner", preconditioner_name(scene.solver));
+  j.value("prediction", scene.solver.method == SolverMethod::Newton ? to_string(scene.solver.prediction) : "fall");
   j.value("drag", s.drag);
   j.value("stage_drag", s.sequencing ? scene.amrc.stage_drag : 0.0);
   j.begin_object("self_contact")

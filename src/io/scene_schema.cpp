@@ -124,6 +124,14 @@ void declare_solver(ParameterList& list) {
            "with `preconditioner = \"auto\"`, a step on a multigrid mesh may take this many linear CG iterations "
            "(a long step's Newton iterations need them); Jacobi's meshes keep `max_iterations`, which their dt "
            "rule reads").example("500")
+      .add("prediction", &SolverSpec::prediction, {Prediction::Fall, Prediction::Rest, Prediction::Cheaper},
+           "newton: a step's first guess: fall | rest | cheaper",
+           "a Newton step's first guess: the last step's motion carried on, with gravity's free fall added "
+           "(`fall`: exact for a falling cloth) or not (`rest`: exact for a cloth at rest, where the fall "
+           "would press g dt^2 into the contact layer and the edges holding the hanging sides); `cheaper`: "
+           "whichever of the two has the lower cost, one evaluation more a step "
+           "([design.md §6](design.md#6-solvers-the-cost-is-stiff)); the nonlinear CG takes `fall`")
+          .example("fall")
       .add("newton_target", &SolverSpec::newton_target, "", at_least(1),
            "multigrid: Newton iterations per step that dt grows under",
            "with `preconditioner = \"multigrid\"`, dt grows (×1.25) after a step of at most this many Newton "

@@ -56,6 +56,15 @@ const char* to_string(Preconditioner p) {
   return "?";
 }
 
+const char* to_string(Prediction p) {
+  switch (p) {
+    case Prediction::Fall: return "fall";
+    case Prediction::Rest: return "rest";
+    case Prediction::Cheaper: return "cheaper";
+  }
+  return "?";
+}
+
 Preconditioner stage_preconditioner(const SolverSpec& s, int64_t particles) {
   if (s.preconditioner != Preconditioner::Auto) return s.preconditioner;
   return particles >= s.multigrid_particles ? Preconditioner::Multigrid : Preconditioner::Jacobi;

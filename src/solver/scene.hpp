@@ -18,6 +18,10 @@ enum class SolverMethod { Newton, Cg };
 // The Newton step's linear solve: CG preconditioned by the stiffness's
 // diagonal, or by a multigrid V-cycle over the grid's levels (one rank).
 enum class Preconditioner { Jacobi, Multigrid, Auto };
+// A Newton step's first guess: the history moved on with its velocity and
+// gravity's free fall added (fall), not added (rest: exact for a cloth at
+// rest), or whichever of the two costs less (cheaper).
+enum class Prediction { Fall, Rest, Cheaper };
 // What AMRC's thresholds are compared with (AmrcSpec::indicator).
 enum class AmrcIndicator { Angle, Deflection };
 
@@ -75,6 +79,7 @@ struct SolverSpec {
   int multigrid_particles = 1000;
   double multigrid_dt_max = 0.05;   // s, auto: dt_max on the multigrid's meshes (its dt follows Newton's count)
   int multigrid_max_iterations = 1000;  // auto: max_iterations on the multigrid's meshes
+  Prediction prediction = Prediction::Cheaper;  // Newton: a step's first guess (nonlinear CG: fall)
   int newton_target = 16;       // multigrid: dt grows while a step takes at most this many Newton iterations
   bool multigrid_divided = true;  // several ranks: the V-cycle's finest level on each rank's rows (else gathered whole)
   bool slope_line_search = true;  // Newton's line search on the energy slope (else backtracking on the cost)
@@ -160,6 +165,7 @@ const char* to_string(GradientMode g);
 const char* to_string(Schedule s);
 const char* to_string(SolverMethod m);
 const char* to_string(Preconditioner p);
+const char* to_string(Prediction p);
 
 // The preconditioner a mesh of `particles` active particles is solved
 // with: `auto` takes the multigrid from solver.multigrid_particles on (its

@@ -99,7 +99,8 @@ class TimeLoop {
   void refresh_ghosts(bool history);
 
  private:
-  void predict();
+  void predict(double fall);
+  int choose_prediction(Timers& tm);
   void stop_at_margin(int64_t p);
   void stop_all_at_margin();
   double margin_overshoot() const;
