@@ -21,12 +21,14 @@ Outcome free_fall(Prediction p, int steps) {
 }
 
 // The small drape onto a box, at a fixed 4 ms step.
-Outcome box_drape(Prediction p, int threads, int steps) {
+Scene box_drape_scene(Prediction p) {
   Scene s = kink_drape_scene(true);
   s.solver.slope_line_search = true;
   s.solver.prediction = p;
-  return run_kink_drape(s, threads, steps);
+  return s;
 }
+
+Outcome box_drape(Prediction p, int threads, int steps) { return run_kink_drape(box_drape_scene(p), threads, steps); }
 
 TEST(Prediction, CheaperTakesTheFallInAFreeFall) {
   const Outcome fall = free_fall(Prediction::Fall, 10), cheaper = free_fall(Prediction::Cheaper, 10),
@@ -42,17 +44,12 @@ TEST(Prediction, CheaperTakesTheFallInAFreeFall) {
 // The Newton iterations of the box drape's steps 121 to 160 (t = 0.48 to
 // 0.64 s: landed, the sides settling), at the fixed step.
 int settling_newton_iterations(Prediction p) {
-  Scene s = kink_drape_scene(true);
-  s.solver.slope_line_search = true;
-  s.solver.prediction = p;
-  Simulation w(s, test_fabric());
   int newton = 0;
-  for (int k = 1; k <= 160; ++k) {
-    const StepStats st = w.step();
-    if (k <= 120) continue;
+  run_kink_drape(box_drape_scene(p), 1, 160, [&newton](int k, const StepStats& st) {
+    if (k <= 120) return;
     EXPECT_TRUE(st.converged) << "step " << k;
     newton += st.newton_iterations;
-  }
+  });
   return newton;
 }
 

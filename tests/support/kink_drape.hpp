@@ -40,13 +40,16 @@ inline Scene kink_drape_scene(bool fixed_dt) {
 }
 
 // `steps` steps of scene s on `threads` threads: the Newton iterations,
-// evaluations, linear iterations and unconverged steps summed, and the state's checksum.
-inline KinkDrapeOutcome run_kink_drape(const Scene& s, int threads, int steps) {
+// evaluations, linear iterations and unconverged steps summed, and the state's
+// checksum; `on_step` (if given) sees each step's stats, steps counted from 1.
+inline KinkDrapeOutcome run_kink_drape(const Scene& s, int threads, int steps,
+                                       const std::function<void(int, const StepStats&)>& on_step = {}) {
   omp_set_num_threads(threads);
   Simulation w(s, test_fabric());
   KinkDrapeOutcome out;
   for (int k = 0; k < steps; ++k) {
     const StepStats st = w.step();
+    if (on_step) on_step(k + 1, st);
     out.newton += st.newton_iterations;
     out.evaluations += st.evaluations;
     out.linear += st.iterations;
