@@ -673,6 +673,7 @@ TEST(Cli, ReportSaysWhatWasSolvedOnACoarserMesh) {
   EXPECT_EQ(report_field(j, "stage_linear_iterations"), report_field(j, "linear_iterations"));
   EXPECT_EQ(report_field(j, "stage_evaluations"), report_field(j, "evaluations"));
   EXPECT_NE(report_field(j, "stage_multigrid_builds"), "0");  // the multigrid
+  EXPECT_EQ(report_field(j, "stage_rest_guesses"), "0");     // three steps of free fall: the fall's guess
   EXPECT_NE(report_field(j, "stage_newton_iterations"), "0");
   // The first line names the grid and the mesh solved first.
   EXPECT_NE(r.out.find("65 x 65 grid (1089 particles free), solved first on the level-1 mesh (spacing 31.2 mm)"),

@@ -147,6 +147,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
         .value("stage_retries", (long long)g.retries)
         .value("stage_contact_halvings", (long long)g.contact_halvings)
         .value("stage_multigrid_builds", (long long)g.multigrid_builds)
+        .value("stage_rest_guesses", (long long)g.rest_guesses)
         .value("stage_seconds", g.seconds)
         .value("stage_cpu_seconds", g.cpu_seconds)
         .end_object();

@@ -58,7 +58,7 @@ struct Summary {
     int64_t particles;
     const char* preconditioner = "";  // Newton's on this mesh ("auto" resolved), "none" with nonlinear CG
     int64_t steps = 0, newton = 0, linear = 0, evaluations = 0;
-    int64_t retries = 0, contact_halvings = 0, multigrid_builds = 0;
+    int64_t retries = 0, contact_halvings = 0, multigrid_builds = 0, rest_guesses = 0;
     double seconds = 0, cpu_seconds = 0;  // wall and this process's CPU time of its steps
     void add(const StepStats& st, double wall, double cpu) {
       ++steps;
@@ -68,6 +68,7 @@ struct Summary {
       retries += st.retries;
       contact_halvings += st.contact_halvings;
       multigrid_builds += st.multigrid_builds;
+      rest_guesses += st.rest_guess;
       seconds += wall;
       cpu_seconds += cpu;
     }

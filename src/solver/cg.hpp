@@ -30,6 +30,9 @@ struct CgSettings {
   // Newton: the linear solves' tolerance follows the residual's last
   // reduction (Eisenstat-Walker) instead of its size.
   bool adaptive_forcing = false;
+  // Newton: the cost the evaluator settled at the starting z just before
+  // (the time loop's guess): the first evaluation is not repeated.
+  const CostTerms* settled_at_start = nullptr;
   // Asked once per iteration; true ends the minimisation (wall-clock budget,
   // signals). Must answer the same on every rank: the caller makes it collective.
   std::function<bool()> stop_requested;

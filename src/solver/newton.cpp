@@ -395,11 +395,13 @@ CgResult NewtonSolver::minimize(Evaluator& ev, double* z, const CgSettings& st, 
   // Branches noted at z's slot first (BandActiveSet), the trials' beside them.
   const bool kinks = st.active_set && ev.branches().enabled();
   if (kinks) ev.branches().at_z();
-  {
+  if (st.settled_at_start) {
+    res.cost = *st.settled_at_start;
+  } else {
     ScopedPhase ph(tm, kGradient);
     res.cost = ev.settled_cost(z);
+    res.evaluations = 1;
   }
-  res.evaluations = 1;
   double c0 = res.cost.total();
   size_vectors(ev);
   // The free particles' positions before the line search's trials, in the

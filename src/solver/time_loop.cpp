@@ -131,28 +131,38 @@ double TimeLoop::margin_overshoot() const {
 // g dt^2 into the contact layer's penalty and stretches the edges that hold
 // the hanging sides: Newton's first residuals then run to a hundred particle
 // weights a particle. Which guess is nearer is read from the cost, a
-// fixed-order sum (the same choice on any ranks and threads). Returns the
-// evaluations it took.
-int TimeLoop::choose_prediction(Timers& tm) {
-  if (spec_.prediction == Prediction::Fall) return 0;
+// fixed-order sum (the same choice on any ranks and threads). Counts its
+// evaluations and the guess taken in st; *settled is the cost the evaluator
+// settled last where that was at the guess taken (Newton then starts from
+// it), else null.
+void TimeLoop::choose_prediction(Timers& tm, StepStats& st, const CostTerms** settled) {
+  *settled = nullptr;
+  st.rest_guess = false;
+  if (spec_.prediction == Prediction::Fall) return;
   double fall = 0;
   if (spec_.prediction == Prediction::Cheaper) {
     ScopedPhase ph(tm, kGradient);
     fall = ev_.settled_cost(c_.z.data()).total();
+    ++st.evaluations;
   }
   predict(0.0);
   stop_all_at_margin();
-  if (spec_.prediction == Prediction::Rest) return 0;
-  double rest;
+  st.rest_guess = true;
+  if (spec_.prediction == Prediction::Rest) return;
+  if (ev_.branches().enabled()) ev_.branches().at_z();  // where Newton's first evaluation notes them
   {
     ScopedPhase ph(tm, kGradient);
-    rest = ev_.settled_cost(c_.z.data()).total();
+    guess_cost_ = ev_.settled_cost(c_.z.data());
+    ++st.evaluations;
   }
+  const double rest = guess_cost_.total();
   if (std::isfinite(fall) && !(rest <= fall)) {  // the fall, unless it overflowed
     predict(1.0);
     stop_all_at_margin();
+    st.rest_guess = false;
+  } else {
+    *settled = &guess_cost_;
   }
-  return 2;
 }
 
 void TimeLoop::stop_all_at_margin() {
@@ -293,7 +303,8 @@ StepStats TimeLoop::step(Timers& timers, const std::function<void(int, double)>&
     }
     stop_all_at_margin();
     const bool newton = spec_.method == SolverMethod::Newton && !cs.numeric;
-    if (newton) st.evaluations += choose_prediction(timers);
+    cs.settled_at_start = nullptr;
+    if (newton) choose_prediction(timers, st, &cs.settled_at_start);
     r = newton ? newton_.minimize(ev_, c_.z.data(), cs, timers, on_iteration)
                : cg_.minimize(ev_, c_.z.data(), cs, timers, on_iteration);
     st.iterations += r.iterations;

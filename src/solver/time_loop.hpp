@@ -19,6 +19,7 @@ struct StepStats {
   int newton_iterations = 0;  // Newton steps (solver.method = newton); iterations are then linear CG's
   int contact_halvings = 0;   // dt halved before solving: the prediction overshot the contact margin
   int multigrid_builds = 0;   // multigrid hierarchies built in this step
+  bool rest_guess = false;    // Newton started from the guess without gravity's fall (solver.prediction)
   bool converged = false;
   CostTerms cost;
   double cost_per_particle = 0;
@@ -58,14 +59,15 @@ class TimeLoop {
   NewtonSolver& newton() { return newton_; }
   int64_t free_particles() const { return free_; }
   // Jacobi or the multigrid (never `auto`: Simulation resolves it per mesh,
-  // stage_solver), with its dt_max and max_iterations, switched between
-  // steps; dt's rule follows it (next_time_step).
+  // stage_solver), with its dt_max, max_iterations and first guess,
+  // switched between steps; dt's rule follows it (next_time_step).
   Preconditioner preconditioner() const { return spec_.preconditioner; }
   void set_solver(const SolverSpec& s) {
     if (s.preconditioner != spec_.preconditioner) newton_.set_preconditioner(s.preconditioner);
     spec_.preconditioner = s.preconditioner;
     spec_.dt_max = s.dt_max;
     spec_.max_iterations = s.max_iterations;
+    spec_.prediction = s.prediction;
   }
 
   // The arrays of the evaluator, both solvers and the step's saved unknowns.
@@ -100,7 +102,7 @@ class TimeLoop {
 
  private:
   void predict(double fall);
-  int choose_prediction(Timers& tm);
+  void choose_prediction(Timers& tm, StepStats& st, const CostTerms** settled);
   void stop_at_margin(int64_t p);
   void stop_all_at_margin();
   double margin_overshoot() const;
@@ -121,6 +123,7 @@ class TimeLoop {
   Evaluator ev_;
   Minimizer cg_;
   NewtonSolver newton_;
+  CostTerms guess_cost_;  // the guess's cost, where choose_prediction settled it last
   std::vector<double> z_saved_;  // this rank's unknowns at the step's start, compact
   // The halo plan's particles as slots of x1, x2 (-1: not held), sent and
   // received, for the plan and the slots of the versions below.
