@@ -34,6 +34,7 @@ void SelfContact::fit_hash(int64_t hashed, int64_t n, bool exact) {
   while (buckets < hashed) buckets *= 2;  // a power of two (the hash masks), about one a particle
   fit(bucket_start_, size_t(buckets + 1), size_t(4 * n + 1), exact, int32_t(0));
   fit(bucket_items_, size_t(hashed), size_t(n), exact, int32_t(0));
+  fit(bucket_x_, size_t(3 * hashed), size_t(3 * n), exact, 0.0);
 }
 
 void SelfContact::memory(MemoryTable& t) const {
@@ -44,6 +45,7 @@ void SelfContact::memory(MemoryTable& t) const {
   t.add(o, "partners (hashed indices)", partners_);
   t.add(o, "contact ghosts' own-numbering indices", ghost_lo_);
   t.add(o, "spatial hash", (bucket_start_.capacity() + bucket_items_.capacity()) * sizeof(int32_t));
+  t.add(o, "spatial hash's positions", bucket_x_);
   t.add(o, "contact ghosts", ghosts_);
 }
 
@@ -94,8 +96,11 @@ void SelfContact::cell_of(const double* x, int64_t cell[3]) const {
   for (int i = 0; i < 3; ++i) cell[i] = int64_t(std::floor(x[i] / reach_));
 }
 
+// Linear in the cell: the cells of a row along x fall in consecutive
+// buckets (a search reads its stencil's three at once), the rows at
+// pseudo-random places (odd multipliers near 2^64 over the golden ratio).
 int64_t SelfContact::bucket_of(int64_t cx, int64_t cy, int64_t cz) const {
-  const uint64_t h = uint64_t(cx) * 73856093u ^ uint64_t(cy) * 19349663u ^ uint64_t(cz) * 83492791u;
+  const uint64_t h = uint64_t(cx) + uint64_t(cy) * 0x9e3779b97f4a7c15ull + uint64_t(cz) * 0xc2b2ae3d27d4eb4full;
   return int64_t(h & uint64_t(buckets_ - 1));
 }
 
@@ -123,6 +128,10 @@ void SelfContact::hash_particles() {
   }
   for (int64_t b = buckets_; b > 0; --b) start[b] = start[b - 1];  // back to each bucket's start
   start[0] = 0;
+  // The positions in bucket order: a search reads a bucket's at one place.
+#pragma omp parallel for schedule(static)
+  for (int64_t s = 0; s < hashed; ++s)
+    for (int i = 0; i < 3; ++i) bucket_x_[3 * s + i] = built_at(bucket_items_[s])[i];
 }
 
 template <class F>
@@ -134,30 +143,41 @@ void SelfContact::candidates(const Cloth& c, const ActiveList& particles, int64_
   cell_of(xp, home);
   const int ip = g.i_of(p), jp = g.j_of(p);
   const double reach2 = reach_ * reach_;
-  for (int64_t a = -1; a <= 1; ++a)
-    for (int64_t b = -1; b <= 1; ++b)
-      for (int64_t e = -1; e <= 1; ++e) {
-        const int64_t cx = home[0] + a, cy = home[1] + b, cz = home[2] + e;
-        const int64_t k = bucket_of(cx, cy, cz);
-        // The cheapest test first: most of a bucket lies beyond the reach
-        // (its cell's far side, or another cell hashed here); most within
-        // it are mesh neighbours, so the cell's three divisions come last.
-        // The same tests, so the same partners in the same order.
-        for (int32_t s = bucket_start_[k]; s < bucket_start_[k + 1]; ++s) {
-          const int64_t h = bucket_items_[s];
-          if (h == pos) continue;
-          const double* xq = built_at(h);
-          double d2 = 0;
-          for (int i = 0; i < 3; ++i) d2 += (xq[i] - xp[i]) * (xq[i] - xp[i]);
-          if (!(d2 < reach2)) continue;
-          const int64_t q = h < own_ ? particles.items[size_t(h)] : ghosts_[size_t(h - own_)];
-          const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
-          if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
-          cell_of(xq, at);
-          if (at[0] != cx || at[1] != cy || at[2] != cz) continue;  // another cell in this bucket
-          f(int32_t(h));
+  // The particles hashed from s0 to s1 that lie in row (cy, cz), cells x0
+  // to x1 along it. The cheapest test first, on positions read in a
+  // row: most lie beyond the reach (their cell's far side, or another cell
+  // hashed here); most left are mesh neighbours, found from the particle's
+  // id (a division) last.
+  auto visit = [&](int32_t s0, int32_t s1, int64_t x0, int64_t x1, int64_t cy, int64_t cz) {
+    for (int32_t s = s0; s < s1; ++s) {
+      const double* xq = &bucket_x_[3 * size_t(s)];
+      double d2 = 0;
+      for (int i = 0; i < 3; ++i) d2 += (xq[i] - xp[i]) * (xq[i] - xp[i]);
+      if (!(d2 < reach2)) continue;
+      const int64_t h = bucket_items_[s];
+      if (h == pos) continue;
+      cell_of(xq, at);
+      if (at[1] != cy || at[2] != cz || at[0] < x0 || at[0] > x1) continue;  // another cell hashed here
+      const int64_t q = h < own_ ? particles.items[size_t(h)] : ghosts_[size_t(h - own_)];
+      const double di = (g.i_of(q) - ip) * g.hi, dj = (g.j_of(q) - jp) * g.hj;
+      if (di * di + dj * dj <= exclude2_) continue;  // a mesh neighbour
+      f(int32_t(h));
+    }
+  };
+  const int32_t* start = bucket_start_.data();
+  for (int64_t b = -1; b <= 1; ++b)
+    for (int64_t e = -1; e <= 1; ++e) {
+      const int64_t cy = home[1] + b, cz = home[2] + e;
+      const int64_t k = bucket_of(home[0], cy, cz);
+      if (k >= 1 && k + 1 < buckets_) {
+        visit(start[k - 1], start[k + 2], home[0] - 1, home[0] + 1, cy, cz);  // the row's three cells' buckets, side by side
+      } else {  // wrapped about the table's ends: a cell at a time (a small table may hold a bucket twice)
+        for (int64_t a = -1; a <= 1; ++a) {
+          const int64_t w = (k + a) & (buckets_ - 1);
+          visit(start[w], start[w + 1], home[0] + a, home[0] + a, cy, cz);
         }
       }
+    }
 }
 
 void SelfContact::build(const Cloth& c, const ActiveList& particles, const double* x, const Halo& halo) {

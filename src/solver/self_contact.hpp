@@ -186,6 +186,7 @@ class SelfContact {
   int64_t id_of_hashed(int32_t h) const { return h < own_ ? particles_->items[size_t(h)] : ghosts_[size_t(h - own_)]; }
   int64_t local_of_hashed(int32_t h) const { return h < own_ ? h : ghost_lo_[size_t(h - own_)]; }
   std::vector<int32_t> bucket_start_, bucket_items_;  // the hash: hashed particles (built_at) by bucket
+  std::vector<double> bucket_x_;    // their build positions in that order, 3 each (the build's scratch)
   std::vector<int64_t> ghosts_;     // the last build's contact ghosts, ascending
   std::vector<int64_t> kept_;       // those some listed particle has as a partner
   std::vector<char> partner_;       // per contact ghost: a partner (the build's scratch)
