@@ -135,20 +135,6 @@ bool add_surface(const Contact& c, double d, const double* n, const double* hess
 
 }  // namespace
 
-namespace {
-// Whether x lies beyond the layer off one of the box's faces: its distance
-// is then at least that face's gap (sqrt(fl(q^2)) is q exactly and further
-// terms only add), so the penalty is zero and box_distance's square root and
-// divisions need not run: the same result, most of the cloth away from the box.
-inline bool beyond_box_layer(const Obstacle& o, const double* x, double layer) {
-  for (int k = 0; k < 3; ++k) {
-    const double q = std::fabs(x[k] - o.center[k]) - o.half[k];
-    if (q > 0 && q >= layer) return true;
-  }
-  return false;
-}
-}  // namespace
-
 bool contact_force(const Contact& c, const double* x, double* force, const double* r,
                    double* jac_t_r, double* slope) {
   force[0] = force[1] = force[2] = 0;
@@ -158,7 +144,7 @@ bool contact_force(const Contact& c, const double* x, double* force, const doubl
   // The curvature term only enters -(dF/dx)^T r: the Newton passes, which do
   // not ask for it, skip its nine divisions per particle.
   double* hess = jac_t_r ? hess_at : nullptr;
-  if (o.shape == ObstacleShape::Box && !beyond_box_layer(o, x, c.thickness)) {
+  if (o.shape == ObstacleShape::Box && !beyond_layer(o, x, c.thickness)) {
     const double d = box_distance(o, x, n, hess);
     hit |= add_surface(c, d, n, hess, force, r, jac_t_r, slope);
   } else if (o.shape == ObstacleShape::Sphere || o.shape == ObstacleShape::Disc) {

@@ -3,6 +3,8 @@
 // than the contact thickness delta to a surface is pushed out along n, with
 // a force rising smoothly from zero at distance delta. Signed distance d, its gradient n and Hessian come from
 // the obstacle's shape; the Newton cost needs all three.
+#include <cmath>
+
 #include "solver/scene.hpp"
 
 namespace drape {
@@ -35,6 +37,20 @@ double sphere_distance(const Obstacle& o, const double* x, double* n, double* he
 double disc_distance(const Obstacle& o, const double* x, double* n, double* hess);
 // Whichever of the three the obstacle is; 1e300 (far) without one.
 double shape_distance(const Obstacle& o, const double* x, double* n, double* hess);
+// Whether x lies beyond a layer about the shape, found without its distance:
+// off one of a box's faces by at least the layer (the distance is then at
+// least that face's gap: sqrt(fl(q^2)) is q exactly and further terms only
+// add), so no penalty or hold of that layer acts and box_distance's square
+// root and divisions need not run. Most of the cloth is away from the box.
+// False where it cannot tell (inside that reach, or another shape).
+inline bool beyond_layer(const Obstacle& o, const double* x, double layer) {
+  if (o.shape != ObstacleShape::Box) return false;
+  for (int k = 0; k < 3; ++k) {
+    const double q = std::fabs(x[k] - o.center[k]) - o.half[k];
+    if (q > 0 && q >= layer) return true;
+  }
+  return false;
+}
 
 // Penalty force on a particle at x. If jac_t_r is non-null, also adds
 // -(dF/dx)^T r to it (the contact part of the Newton cost's gradient).
@@ -54,6 +70,8 @@ void friction_force(const Contact& c, const double* x, const double* x1, double*
 // Adds -dF/dx (3x3, row-major, symmetric, positive semi-definite) to block;
 // false (nothing added) where no surface holds the particle.
 bool friction_block(const Contact& c, const double* x, const double* x1, double* block);
+// Whether a surface holds the particle (friction_block adds a block).
+bool friction_holds(const Contact& c, const double* x1);
 // The trace of friction_block's block (0 without one): diagonal estimates.
 double friction_trace(const Contact& c, const double* x, const double* x1);
 // The penalty force of a layer penetrated by pen (> 0) and its slope.

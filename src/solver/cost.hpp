@@ -595,6 +595,11 @@ class Evaluator {
   bool kg_ready_ = false;
   bool settled_ = false;
   std::vector<double> kg_e_, kg_t_, kg_s_;
+  // Per free particle (list order), kept beside them: whether the obstacle,
+  // the floor or friction acts on it at the diagonal's z (1) or nothing
+  // does (0): the products then skip its contact and friction terms, which
+  // would add nothing, and their reads of z and x1 at its grid id.
+  std::vector<uint8_t> touch_;
   // An edge's kept numbers into ke: its frozen tension and slope / rest
   // length. Its direction and length are z's, its width the rest
   // geometry's: computed or read where used (edge_stiffness_at), not held.

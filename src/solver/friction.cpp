@@ -30,7 +30,10 @@ int holds_at(const Contact& c, const double* x1, Hold* h) {
     ++count;
   };
   double n[3];
-  if (o.shape != ObstacleShape::None && c.friction > 0) hold(c.friction, shape_distance(o, x1, n, nullptr), n);
+  // Every product and evaluation asks, for every particle: the far ones
+  // are told apart without the distance.
+  if (o.shape != ObstacleShape::None && c.friction > 0 && !beyond_layer(o, x1, c.thickness))
+    hold(c.friction, shape_distance(o, x1, n, nullptr), n);
   if (o.floor) {
     const double up[3] = {0, 0, 1};
     hold(c.floor_friction, x1[2] - o.floor_z, up);
@@ -95,6 +98,11 @@ bool friction_block(const Contact& c, const double* x, const double* x1, double*
     add_block(h[k], s, u, c.slip, block);
   }
   return count > 0;
+}
+
+bool friction_holds(const Contact& c, const double* x1) {
+  Hold h[2];
+  return c.has_friction() && holds_at(c, x1, h) > 0;
 }
 
 double friction_trace(const Contact& c, const double* x, const double* x1) {

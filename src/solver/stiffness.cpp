@@ -177,17 +177,20 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
   // comparisons), not kept.
   const double inertia = m_.inertia_coeff();
   auto particle = [&](int64_t p, int64_t pos) {
-    double fc[kKc];
-    contact_terms(p, z, fc);
-    const double fn = fc[3], slope = fc[4], mass = c_.mass_at(p) * inertia;
+    const double mass = c_.mass_at(p) * inertia;
     const double* vp = v + 3 * pos;  // the free particles come first, in list order
     double out[3];
     for (int k = 0; k < 3; ++k) out[k] = mass * vp[k];
-    if (fn > 0) {  // slope * n (n.v); n from the force direction
-      const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
-      for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
+    if (!keep_ || touch_[pos]) {
+      double fc[kKc];
+      contact_terms(p, z, fc);
+      const double fn = fc[3], slope = fc[4];
+      if (fn > 0) {  // slope * n (n.v); n from the force direction
+        const double nv = (fc[0] * vp[0] + fc[1] * vp[1] + fc[2] * vp[2]) / fn;
+        for (int k = 0; k < 3; ++k) out[k] += slope * nv * fc[k] / fn;
+      }
+      add_friction_product(p, z, vp, out);
     }
-    add_friction_product(p, z, vp, out);
     if (m_.self_contact)  // partners: free here, or contact ghosts (numbered with the others)
       self_.add_product_local(pos, p, z, vp, v, out);
     gather_vector(rows_[pos], out);
@@ -354,6 +357,9 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   auto particle = [&](int64_t p, int64_t pos) {
     double kc[kKc];
     contact_terms(p, z, kc);
+    // The product adds a contact term where the force is non-zero, a
+    // friction block where a surface holds the particle.
+    if (keep_) touch_[pos] = kc[3] > 0 || friction_holds(m_.contact, c_.x1_at(p));
     double dsum = c_.mass_at(p) * inertia + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
