@@ -119,10 +119,13 @@ void Evaluator::fit_arrays(bool exact) {
     each(kg_s_, ns, kKgCell, ms, 0.0);
     for (auto* a : {&k_tension_, &k_slope_e_, &k_slope_t_, &k_slope_s_}) std::vector<double>().swap(*a);
   }
-  if (stiffness_ && keep_)
+  if (stiffness_ && keep_) {
     each(touch_, np, 1, n, uint8_t(0));
-  else
+    each(mass_k_, np, 1, n, 0.0);
+  } else {
     std::vector<uint8_t>().swap(touch_);
+    std::vector<double>().swap(mass_k_);
+  }
   each(rows_, nr, 1, n, GatherRow{});
   each(rho_, np, 3, n, 0.0);
   each(cost_p_, np, 1, n, 0.0);
@@ -195,7 +198,8 @@ void Evaluator::memory(MemoryTable& t) const {
   };
   t.add(o, "element buffers (edges, triples, cells)", sum({&buf_e_, &buf_t_, &buf_s_}));
   t.add(o, "products' kept numbers (elements)", sum({&kg_e_, &kg_t_, &kg_s_}));
-  t.add(o, "products' kept touches (particles)", touch_);
+  t.add(o, "products' kept touches and masses (particles)",
+        touch_.capacity() * sizeof(uint8_t) + mass_k_.capacity() * sizeof(double));
   t.add(o, "particles' Newton costs", cost_p_);
   t.add(o, "band costs, slopes, force derivatives",
         sum({&cost_e_, &cost_t_, &cost_s_, &gq_e_, &gq_t_, &gq_s_, &gf_e_, &gf_t_, &gf_s_}));

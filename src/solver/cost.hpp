@@ -600,6 +600,9 @@ class Evaluator {
   // does (0): the products then skip its contact and friction terms, which
   // would add nothing, and their reads of z and x1 at its grid id.
   std::vector<uint8_t> touch_;
+  // And its mass, read in list order by the products, not at the grid id (a
+  // coarse stage's particles lie a cache line apart there).
+  std::vector<double> mass_k_;
   // An edge's kept numbers into ke: its frozen tension and slope / rest
   // length. Its direction and length are z's, its width the rest
   // geometry's: computed or read where used (edge_stiffness_at), not held.

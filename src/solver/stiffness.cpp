@@ -172,12 +172,12 @@ void Evaluator::stiffness_product_local(const double* z, double* v, double* kv) 
     for (int k = 0; k < 4; ++k) put(&buf_s_[kShearSlot * pos + 3 * k], out[k]);
   };
   // A particle's contact force, its size and slope (size 0 where it does
-  // not touch), and its mass term's coefficient: computed from z in each
-  // product (most particles are past the obstacle's layer: a few
-  // comparisons), not kept.
+  // not touch): computed from z in each product where the diagonal found
+  // the particle touching (keeping), or everywhere; its mass kept by the
+  // diagonal in list order (keeping) times Model::inertia_coeff.
   const double inertia = m_.inertia_coeff();
   auto particle = [&](int64_t p, int64_t pos) {
-    const double mass = c_.mass_at(p) * inertia;
+    const double mass = (keep_ ? mass_k_[pos] : c_.mass_at(p)) * inertia;
     const double* vp = v + 3 * pos;  // the free particles come first, in list order
     double out[3];
     for (int k = 0; k < 3; ++k) out[k] = mass * vp[k];
@@ -359,7 +359,10 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
     contact_terms(p, z, kc);
     // The product adds a contact term where the force is non-zero, a
     // friction block where a surface holds the particle.
-    if (keep_) touch_[pos] = kc[3] > 0 || friction_holds(m_.contact, c_.x1_at(p));
+    if (keep_) {
+      touch_[pos] = kc[3] > 0 || friction_holds(m_.contact, c_.x1_at(p));
+      mass_k_[pos] = c_.mass_at(p);
+    }
     double dsum = c_.mass_at(p) * inertia + kc[4] / 3;
     if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
