@@ -70,10 +70,9 @@ void friction_force(const Contact& c, const double* x, const double* x1, double*
 // Adds -dF/dx (3x3, row-major, symmetric, positive semi-definite) to block;
 // false (nothing added) where no surface holds the particle.
 bool friction_block(const Contact& c, const double* x, const double* x1, double* block);
-// Whether a surface holds the particle (friction_block adds a block).
-bool friction_holds(const Contact& c, const double* x1);
-// The trace of friction_block's block (0 without one): diagonal estimates.
-double friction_trace(const Contact& c, const double* x, const double* x1);
+// The trace of friction_block's block (0 without one): diagonal estimates;
+// held (if given) says whether a surface holds the particle (a block).
+double friction_trace(const Contact& c, const double* x, const double* x1, bool* held = nullptr);
 // The penalty force of a layer penetrated by pen (> 0) and its slope.
 double penalty(const Contact& c, double pen, double* slope);
 

@@ -100,14 +100,11 @@ bool friction_block(const Contact& c, const double* x, const double* x1, double*
   return count > 0;
 }
 
-bool friction_holds(const Contact& c, const double* x1) {
-  Hold h[2];
-  return c.has_friction() && holds_at(c, x1, h) > 0;
-}
-
-double friction_trace(const Contact& c, const double* x, const double* x1) {
+double friction_trace(const Contact& c, const double* x, const double* x1, bool* held) {
   double blk[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  return friction_block(c, x, x1, blk) ? blk[0] + blk[4] + blk[8] : 0.0;
+  const bool holds = friction_block(c, x, x1, blk);
+  if (held) *held = holds;
+  return holds ? blk[0] + blk[4] + blk[8] : 0.0;
 }
 
 }  // namespace drape

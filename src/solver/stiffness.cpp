@@ -357,14 +357,17 @@ void Evaluator::stiffness_diagonal_local(const double* z, double* diag) {
   auto particle = [&](int64_t p, int64_t pos) {
     double kc[kKc];
     contact_terms(p, z, kc);
+    bool held = false;
+    const double friction = friction_trace(m_.contact, z + 3 * p, c_.x1_at(p), &held);
+    const double mass = c_.mass_at(p);
     // The product adds a contact term where the force is non-zero, a
     // friction block where a surface holds the particle.
     if (keep_) {
-      touch_[pos] = kc[3] > 0 || friction_holds(m_.contact, c_.x1_at(p));
-      mass_k_[pos] = c_.mass_at(p);
+      touch_[pos] = kc[3] > 0 || held;
+      mass_k_[pos] = mass;
     }
-    double dsum = c_.mass_at(p) * inertia + kc[4] / 3;
-    if (m_.contact.has_friction()) dsum += friction_trace(m_.contact, z + 3 * p, c_.x1_at(p)) / 3;
+    double dsum = mass * inertia + kc[4] / 3;
+    if (m_.contact.has_friction()) dsum += friction / 3;
     if (m_.self_contact) dsum += self_.slope_sum(pos, p, z) / 3;
     gather_diagonal(rows_[pos], dsum);
     for (int k = 0; k < 3; ++k) diag[3 * pos + k] = dsum;
