@@ -67,51 +67,63 @@ std::string gb(int64_t bytes) {
 
 }  // namespace
 
-int64_t estimated_bytes_per_rank(int64_t n, int ranks, bool nonlinear_cg) {
-  // Measured peak RSS (report.json's peak_rss_bytes) of the default scene on
-  // its finest mesh, 10 steps, one rank, 200x200 and 400x400: Newton 157.7
-  // and 371.9 MB, i.e. 1785 bytes a particle over 86 MB (multigrid, AMRC and
-  // grid sequencing within 62 bytes a particle of it); the nonlinear CG (or
-  // the numeric gradient, which runs it) 168.4 and 415.6 MB, 2060 bytes over
-  // 86 MB: its vectors are larger than Newton's. Rounded up, for a margin.
-  // Of those, the arrays sized by the rank's lists (the evaluator's in list
-  // order, Newton's compact vectors, the lists: 1168 of 1667 listed bytes a
-  // particle at 1000 x 1000) fall with more ranks, and so do the nonlinear
-  // CG's six vectors (384 bytes, in the compact order of the rank's own
-  // unknowns); the cloth's, the residual and the vectors at z's positions
-  // stay the grid's. A rank's lists are counted as 1.5 times its share of the
+int64_t estimated_bytes_per_rank(const Scene& scene, int ranks) {
+  // Fitted to one case, the box drape at 1000 x 1000 on its finest mesh (2
+  // steps, one thread a rank; peak RSS per rank from /usr/bin/time) on 1, 2,
+  // 4 and 8 ranks: Newton 1.20, 0.67, 0.37, 0.23 GB; the nonlinear CG 1.47,
+  // 0.81, 0.45, 0.28 GB. As a + b/P: b, the arrays a rank holds for its own
+  // tiles (its lists, the evaluator's and the solvers' arrays, the cloth's in
+  // slots), 1109 (CG 1360) bytes a particle; a, what every rank holds, the
+  // process's own ~30 MB and the arrays laid out over the whole grid (z's
+  // positions, flags, levels, the slot map; the CG's gradient residual),
+  // 61 (80) bytes a particle. With amrc.enabled (self-contact on), 1 and 4
+  // ranks: 1.24, 0.45 GB, a at 164 bytes a particle: AMRC's tree and
+  // criterion bits and the near-sheet search's room are the grid's too. Each
+  // term rounded up; a rank's lists counted at 1.5 times its share of the
   // grid (METIS's imbalance, AMRC's rebalancing), at most the whole.
-  const int64_t grid = nonlinear_cg ? 700 : 650, listed = nonlinear_cg ? 1400 : 1250;
-  const int64_t fixed = int64_t(96) << 20;
+  const bool cg = scene.solver.method == SolverMethod::Cg || scene.solver.gradient == GradientMode::Numeric;
+  const auto& p = scene.cloth.particles;
+  const int64_t n = int64_t(p[0]) * p[1];
+  int64_t grid = cg ? 95 : 70;
+  if (scene.amrc.enabled || scene.amrc.start_spacing > 0) grid += 35;  // the tree, the criterion's bits
+  if (scene.amrc.enabled && scene.solver.self_contact) grid += 75;      // near-sheet search's room
+  const int64_t listed = cg ? 1500 : 1250;
+  const int64_t fixed = int64_t(64) << 20;
   const double share = std::min(1.0, 1.5 / std::max(1, ranks));
   return fixed + grid * n + int64_t(double(listed) * share * double(n));
 }
 
-int64_t available_bytes() {
+MemoryRoom available_room() {
   const int64_t rss = proc_kb("/proc/self/status", "VmRSS");
-  int64_t room = proc_kb("/proc/meminfo", "MemAvailable");
+  auto plus_rss = [rss](int64_t room) { return room == kUnknown || rss == kUnknown ? room : room + rss; };
   // Address space and data segment count mappings, not only resident pages:
   // what is left under them is the limit less the present size.
-  room = std::min(room, headroom(soft_limit(RLIMIT_AS), proc_kb("/proc/self/status", "VmSize")));
-  room = std::min(room, headroom(soft_limit(RLIMIT_DATA), proc_kb("/proc/self/status", "VmData")));
+  const int64_t process = std::min(headroom(soft_limit(RLIMIT_AS), proc_kb("/proc/self/status", "VmSize")),
+                                   headroom(soft_limit(RLIMIT_DATA), proc_kb("/proc/self/status", "VmData")));
+  int64_t node = proc_kb("/proc/meminfo", "MemAvailable");
   const std::string cg = cgroup_dir();
   if (!cg.empty())
-    room = std::min(room, headroom(cgroup_value(cg + "/memory.max"), cgroup_value(cg + "/memory.current")));
-  if (room == kUnknown) return kUnknown;
-  return rss == kUnknown ? room : room + rss;
+    node = std::min(node, headroom(cgroup_value(cg + "/memory.max"), cgroup_value(cg + "/memory.current")));
+  return {plus_rss(process), plus_rss(node)};
 }
 
 void check_memory(const Scene& scene, MPI_Comm comm) {
   const auto& p = scene.cloth.particles;
-  const bool cg = scene.solver.method == SolverMethod::Cg || scene.solver.gradient == GradientMode::Numeric;
-  const int64_t need = estimated_bytes_per_rank(int64_t(p[0]) * p[1], size_of(comm), cg);
-  // The tightest rank decides for all (MiB fit an int up to 2 PiB).
-  const int64_t mine = std::min<int64_t>(available_bytes() >> 20, std::numeric_limits<int>::max());
-  const int64_t have = int64_t(-max_over_ranks(comm, -int(mine))) << 20;
-  if (need <= have) return;
+  const int64_t need = estimated_bytes_per_rank(scene, size_of(comm));
+  // A process's limits are its own; the node's memory (and a cgroup's) its
+  // ranks share. In MiB (an int reaches 2 PiB).
+  const int sharing = ranks_on_node(comm);
+  const MemoryRoom room = available_room();
+  auto mib = [](int64_t b) { return std::min<int64_t>(b >> 20, std::numeric_limits<int>::max()); };
+  const int64_t mine = std::min(mib(room.process), mib(room.node) / sharing);  // this rank's part
+  const bool short_here = mib(need) > mine;
+  if (max_over_ranks(comm, short_here ? 1 : 0) == 0) return;
+  const int64_t have = int64_t(-max_over_ranks(comm, -int(mine))) << 20;  // the tightest rank's
+  const int most = max_over_ranks(comm, sharing);
   throw InputError("cloth.particles = [" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + "] needs about " +
-                   gb(need) + " GB per rank, " + gb(have) +
-                   " GB are available: use fewer particles or give each rank more memory (every rank holds "
+                   gb(need) + " GB per rank, " + gb(have) + " GB are available" +
+                   (most > 1 ? " to each of the " + std::to_string(most) + " ranks sharing a node" : "") +
+                   ": use fewer particles or give each rank more memory (every rank holds "
                    "some arrays over the whole grid: more ranks lower it only in part)");
 }
 

@@ -230,6 +230,7 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
   j.value("wall_seconds", wall);
   j.value("cpu_seconds", cpu);
   j.value("peak_rss_bytes", (long long)s.peak_rss);
+  j.value("estimated_peak_bytes_per_rank", (long long)s.estimated_rss);
   j.begin_object("phases");
   for (int p = 0; p < kPhases; ++p) j.value(phase_name(p), tm.seconds[p]);
   j.end_object();

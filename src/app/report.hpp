@@ -100,6 +100,7 @@ struct Summary {
   double final_spacing = 0;   // m: the final mesh's spacing, the larger of warp and weft
                               // (with AMRC, the finest leaf's)
   int64_t peak_rss = 0;             // bytes: the largest of the ranks' peak resident sets
+  int64_t estimated_rss = 0;        // bytes a rank, as estimated before the start (check_memory)
 };
 
 // The linear solve's preconditioner: Newton's CG has solver.preconditioner

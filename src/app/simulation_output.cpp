@@ -251,6 +251,7 @@ void Simulation::write_report(double depth, const std::string& checksum) {
   const double wall = std::chrono::duration<double>(clock::now() - t0_).count();
   const double cpu = 1e-6 * double(red().sum_i64(process_cpu_microseconds()));  // collective
   sum_.peak_rss = int64_t(red().max(double(peak_rss_bytes())));                // collective; exact below 2^53
+  sum_.estimated_rss = estimated_bytes_per_rank(scene, ranks_);
   on_root_agreed(comm_, [&] {
     write_file_atomically(opt_.output_dir + "/report.json",
                           report_json(scene, fabric, cloth, sum_, tm_, wall, cpu, ranks_, threads_, checksum, depth,

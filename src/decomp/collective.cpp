@@ -18,6 +18,14 @@ int size_of(MPI_Comm comm) {
   return n;
 }
 
+int ranks_on_node(MPI_Comm comm) {
+  MPI_Comm node = MPI_COMM_NULL;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, rank_of(comm), MPI_INFO_NULL, &node);
+  const int n = size_of(node);
+  MPI_Comm_free(&node);
+  return n;
+}
+
 bool root_decides(MPI_Comm comm, bool decision) {
   int v = decision ? 1 : 0;
   MPI_Bcast(&v, 1, MPI_INT, 0, comm);

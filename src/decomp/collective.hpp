@@ -13,6 +13,8 @@ namespace drape {
 
 int rank_of(MPI_Comm comm);
 int size_of(MPI_Comm comm);
+// How many ranks of comm share this rank's memory (its node), this one included.
+int ranks_on_node(MPI_Comm comm);
 // Rank 0's value of `decision`, on every rank.
 bool root_decides(MPI_Comm comm, bool decision);
 // The largest of the ranks' values, on every rank (0 from all: 0).
