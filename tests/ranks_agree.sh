@@ -167,5 +167,17 @@ for method in $cases; do
     split=${BASH_REMATCH[1]} steps=$(field "$work/$method-1" steps)
     (( steps >= split + 3 )) || { echo "sequence: the run ended at step $steps, right after the split at step $split"; exit 1; }
     echo "sequence: stages $stages, $steps steps"
+    # Past the split the halo is the finest mesh's (ghosts 4 intervals out,
+    # the ring 2), not the coarse stage's (8, 4); a restart there ends alike.
+    widths=$(report "$work/$method-4" '"%d %d" % (r["decomposition"]["ghost_width"], r["decomposition"]["ring_width"])')
+    [[ $widths == "4 2" ]] || { echo "sequence: the halo's widths on the finest stage are $widths, not 4 2"; exit 1; }
+    at=$((split + 2))
+    OMP_WAIT_POLICY=passive OMP_NUM_THREADS=1 "$mpiexec" -n 4 "$drape" "${args[@]}" --set solver.steps=$at \
+      --set output.checkpoint_every=$at --output "$work/$method-part"
+    OMP_WAIT_POLICY=passive OMP_NUM_THREADS=1 "$mpiexec" -n 4 "$drape" --restart "$work/$method-part/checkpoint.h5" \
+      --set solver.steps=$steps --quiet
+    [[ $(sum "$work/$method-part") == $(sum "$work/$method-4") ]] ||
+      { echo "sequence: restarted past the split on 4 ranks: $(sum "$work/$method-part") vs $(sum "$work/$method-4")"; exit 1; }
+    echo "sequence: past the split the halo's widths $widths; restarted there on 4 ranks, the same state"
   fi
 done

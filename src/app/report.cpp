@@ -248,6 +248,8 @@ std::string report_json(const Scene& scene, const Fabric& fabric, const Cloth& c
       .value("imbalance", d.imbalance)
       .value("edge_cut", (long long)d.edge_cut)
       .value("ghosts", (long long)d.ghosts)
+      .value("ghost_width", d.ghost_width)
+      .value("ring_width", d.ring_width)
       .value("halo_exchanges", (long long)d.exchanges)
       .value("halo_bytes", (long long)d.halo_bytes)
       .value("halo_seconds", d.halo_seconds)

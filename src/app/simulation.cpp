@@ -85,8 +85,11 @@ const char* Simulation::stage_preconditioner_name() const {
   return scene.solver.method == SolverMethod::Newton ? to_string(loop->preconditioner()) : "none";
 }
 
+// AMRC's leaves may be as coarse as its tree allows anywhere; grid
+// sequencing's mesh is uniform, its elements as long as its level's.
 GhostWidths Simulation::mesh_ghost_widths() const {
-  return ghost_widths(amrc != nullptr, amrc ? amrc->tree().max_level() : 0);
+  if (!amrc) return ghost_widths(false, 0);
+  return ghost_widths(true, scene.amrc.enabled ? amrc->tree().max_level() : sequence_level_);
 }
 
 // A run on several ranks, new or restarted: no rank makes or reads the

@@ -54,6 +54,12 @@ void Simulation::next_stage() {
     loop->refresh_ghosts(true);
     amrc->set_uniform_level(cloth, fabric.density, scene.cloth.shear, --sequence_level_);
   }
+  // The finer mesh's elements reach half as far: so do the ghosts a rank
+  // holds and the ring of elements it computes (the values came over first).
+  if (ranks_ > 1) {
+    ScopedPhase ph(tm_, kMigrate);
+    set_ghost_widths(dec_, cloth, tiling, mesh_ghost_widths());
+  }
   stage_physics();
   mesh_changed(true);
   const double eased = red().max(ease_stretched_edges(cloth, loop->evaluator()));

@@ -57,6 +57,12 @@ void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d) 
   if (d.halo) hold_with_tiles(c, d.halo->ghost_ids(), tiling, d.owned);
 }
 
+void set_ghost_widths(Decomposition& d, Cloth& c, const Tiling& tiling, GhostWidths gw) {
+  if (!d.halo) return;
+  d.halo->replan(d.partition.owner, gw.width, gw.ring);
+  hold_own_particles(c, tiling, d);
+}
+
 DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm) {
   DecompStats s;
   s.tiles = tl.count();
@@ -68,6 +74,8 @@ DecompStats decomp_stats(const Decomposition& d, const Tiling& tl, MPI_Comm comm
   s.ghosts = all[0];
   s.halo_bytes = all[1];
   s.exchanges = d.halo ? d.halo->exchanges : 0;
+  s.ghost_width = d.halo ? d.halo->width() : 0;
+  s.ring_width = d.halo ? d.halo->ring_width() : 0;
   double secs[2] = {d.halo_seconds(), d.reduction_seconds()}, most[2];
   MPI_Allreduce(secs, most, 2, MPI_DOUBLE, MPI_MAX, comm);
   s.halo_seconds = most[0];

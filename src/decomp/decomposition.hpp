@@ -32,6 +32,7 @@ struct DecompStats {
   int tiles = 0, tile = 0;
   double imbalance = 1;
   int64_t edge_cut = 0, ghosts = 0, halo_bytes = 0, exchanges = 0;
+  int ghost_width = 0, ring_width = 0;  // the halo's last plan's, in finest intervals (0: one rank)
   double halo_seconds = 0, reduction_seconds = 0;  // the largest over ranks
 };
 
@@ -52,6 +53,9 @@ GhostWidths ghost_widths(bool amrc, int max_level);
 // ghosts only (hold_particles), values carried where held before; one rank
 // holds the grid's.
 void hold_own_particles(Cloth& c, const Tiling& tiling, const Decomposition& d);
+// The halo planned anew for widths gw, the same tiles, and only the
+// particles it names held (narrower: values carried, none new).
+void set_ghost_widths(Decomposition& d, Cloth& c, const Tiling& tiling, GhostWidths gw);
 
 // Collective. Throws InputError for more ranks than tiles. The tiles' work
 // from the cloth's every tile, or (`counted`) from the tiles each rank

@@ -33,6 +33,12 @@ class HaloExchange : public Halo {
 
   // A new plan for new tile owners (after a migration), same widths.
   void replan(const std::vector<int>& owner);
+  // A new plan for new widths, same owners (grid sequencing's finer stage).
+  void replan(const std::vector<int>& owner, int width, int ring_width) {
+    width_ = width;
+    ring_width_ = ring_width;
+    replan(owner);
+  }
 
   using Halo::exchange;
   void exchange(double* z, int blocks, const Layout& layout, const int32_t* slot) const override;
@@ -52,6 +58,8 @@ class HaloExchange : public Halo {
   // The tile plan's ghosts (not the contact ones), ascending.
   std::vector<int64_t> ghost_ids() const;
   int neighbours() const { return int(peers_.size()); }
+  int width() const { return width_; }
+  int ring_width() const { return ring_width_; }
   // Contact ghosts on this rank (the last plan_contact's; 0 after replan).
   int64_t contact_ghosts() const;
 
