@@ -2,9 +2,10 @@
 # The memory estimate that refuses a cloth too large for its ranks
 # (src/app/memory.cpp; report.json's estimated_peak_bytes_per_rank) against
 # the peak it estimates (peak_rss_bytes, the largest rank's), on the finest
-# mesh: never below it, on 1 and 2 ranks and with AMRC; and its bytes a
-# particle, the growth from 200 x 200 to 400 x 400, within 1.5 times the
-# measured growth (an estimate far above the peak refuses cloths that fit).
+# mesh in free fall (before any multigrid, which it leaves out): never below
+# it, on 1 and 2 ranks and with AMRC; and its bytes a particle, the growth
+# from 200 x 200 to 400 x 400, within 1.5 times the measured growth (an
+# estimate far above the peak refuses cloths that fit).
 # Usage: memory_estimate_np2.sh DRAPE MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 drape=$1 mpiexec=$2 work=$4

@@ -80,7 +80,9 @@ int64_t estimated_bytes_per_rank(const Scene& scene, int ranks) {
   // ranks: 1.24, 0.45 GB, a at 164 bytes a particle: AMRC's tree and
   // criterion bits and the near-sheet search's room are the grid's too. Each
   // term rounded up; a rank's lists counted at 1.5 times its share of the
-  // grid (METIS's imbalance, AMRC's rebalancing), at most the whole.
+  // grid (METIS's imbalance, AMRC's rebalancing), at most the whole. Not
+  // counted: the multigrid's K and levels, built once the cloth touches
+  // something (docs/performance.md, Memory: most of a landed run's bytes).
   const bool cg = scene.solver.method == SolverMethod::Cg || scene.solver.gradient == GradientMode::Numeric;
   const auto& p = scene.cloth.particles;
   const int64_t n = int64_t(p[0]) * p[1];
