@@ -49,6 +49,8 @@ void NewtonSolver::memory(MemoryTable& t) const {
         (rg_.capacity() + xg_.capacity()) * sizeof(double) + ranks_.memory());
   t.add(o, "the finest level divided: ghosts, ring's K rows, K P and level-1 rows, smoother blocks, messages, vectors (several ranks)",
         div_.memory());
+  t.add(o, "K assembled (the multigrid's finest level)", held_bytes(k_));
+  mg_.memory(t);
 }
 
 // The compact vectors' row r and the evaluator's own numbering's index r

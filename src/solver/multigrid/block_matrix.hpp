@@ -38,6 +38,11 @@ struct BlockMatrix {
   void set_pattern(const std::vector<std::vector<int32_t>>& cols);
 };
 
+// The bytes A's arrays hold (their capacities).
+inline size_t held_bytes(const BlockMatrix& A) {
+  return A.start.capacity() * sizeof(int64_t) + A.col.capacity() * sizeof(int32_t) + A.val.capacity() * sizeof(double);
+}
+
 // Where a stored block keeps its entry (i, j).
 constexpr int entry(int i, int j) { return 3 * j + i; }
 

@@ -21,6 +21,14 @@ class CoarseSolve {
   void factor(const BlockMatrix& A, bool pattern);
   // x = A^-1 b (3 doubles a row of A); x may be b.
   void solve(const double* b, double* x);
+  // The bytes its factor, ordering and workspaces hold.
+  size_t held_bytes() const {
+    size_t b = 0;
+    for (const auto* v : {&perm_, &inv_, &ap_, &ai_, &from_, &parent_, &lp_, &lnz_, &li_, &stack_, &flag_, &degree_})
+      b += v->capacity() * sizeof(int64_t);
+    for (const auto* v : {&ax_, &lx_, &d_, &y_}) b += v->capacity() * sizeof(double);
+    return b + (adj_.capacity() + alive_.capacity()) * sizeof(uint64_t);
+  }
   // L's stored entries (below its unit diagonal): what the ordering saved.
   int64_t factor_entries() const { return lp_.empty() ? 0 : lp_.back(); }
 

@@ -33,6 +33,14 @@ class LineSmoother {
   // `sweeps` sweeps towards A x = b (x = 0 on entry when `zero`); `forward`:
   // i-lines then j-lines, colours ascending; else the reverse.
   void smooth(const BlockMatrix& A, const double* b, double* x, bool zero, bool forward, int sweeps);
+  size_t held_bytes() const {
+    size_t b = (w_.capacity() + r_.capacity()) * sizeof(double);
+    for (const Direction& d : dir_)
+      b += (d.order.capacity() + d.by_colour.capacity() + d.colour_rows.capacity() + d.colour_pos.capacity()) * 4 +
+           (d.line_start.capacity() + d.colour_start.capacity() + d.colour_row_start.capacity()) * 8 +
+           (d.dinv.capacity() + d.low.capacity()) * sizeof(double);
+    return b;
+  }
   // Colours per direction (i-lines, j-lines) and the band's width in blocks.
   int colours(int dir) const { return dir_[dir].colours; }
   int band() const { return dir_[0].band > dir_[1].band ? dir_[0].band : dir_[1].band; }

@@ -197,3 +197,26 @@ void Multigrid::smooth(Level& L, const BlockMatrix& A, const double* b, double* 
 }
 
 }  // namespace drape
+
+namespace drape {
+
+void Multigrid::memory(MemoryTable& t) const {
+  const char* o = "Multigrid";
+  size_t ops = 0, transfers = 0, products = ap_values_.capacity() * sizeof(double), smoothers = 0, vectors = 0;
+  for (const Level& l : levels_) {
+    ops += held_bytes(l.A);
+    transfers += held_bytes(l.P0.P) + held_bytes(l.P0.T) + held_bytes(l.P.P) + held_bytes(l.P.T);
+    products += held_bytes(l.AP0) + held_bytes(l.AP);
+    smoothers += l.smoother.held_bytes() + l.relax.held_bytes() + l.line.held_bytes();
+    for (const auto* v : {&l.tests, &l.zero, &l.b, &l.x, &l.r}) vectors += v->capacity() * sizeof(double);
+    vectors += (l.ids.capacity() + l.fine_row.capacity()) * sizeof(int64_t);
+  }
+  t.add(o, "coarse levels' operators (P^T A P)", ops);
+  t.add(o, "prolongations and their transposes", transfers);
+  t.add(o, "Galerkin workspaces (A P, its values)", products);
+  t.add(o, "smoothers (inverse diagonal blocks, lines, vectors)", smoothers);
+  t.add(o, "coarsest level's factor and ordering", coarse_.held_bytes());
+  t.add(o, "levels' points and cycle vectors", vectors);
+}
+
+}  // namespace drape

@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "solver/memory_table.hpp"
 #include "solver/multigrid/block_matrix.hpp"
 #include "solver/multigrid/coarse_solve.hpp"
 #include "solver/multigrid/fitted_prolongation.hpp"
@@ -99,6 +100,8 @@ class Multigrid {
     return finest_by_points() && !levels_[0].smoothed && !levels_[0].fitted;
   }
   const MultigridSettings& settings() const { return s_; }
+  // Its arrays, by kind (the finest level's operator is the caller's).
+  void memory(MemoryTable& t) const;
   // The next setup carries nothing over from earlier ones (the smoothers'
   // eigenvector estimates): a run restarted at a step builds what the
   // uninterrupted run built there.

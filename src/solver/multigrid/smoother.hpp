@@ -41,6 +41,9 @@ class Chebyshev {
   // (9 a row): the smoothed prolongation's step.
   double estimate() const { return estimate_; }
   const std::vector<double>& dinv() const { return dinv_; }
+  size_t held_bytes() const {
+    return (dinv_.capacity() + r_.capacity() + d_.capacity() + z_.capacity() + eig_.capacity()) * sizeof(double);
+  }
   // The next setup estimates lmax from scratch (no history carried).
   void forget() { eig_.clear(); }
   // The polynomial for a spectrum estimate made elsewhere (a level divided
